@@ -1,0 +1,199 @@
+"""Scene graphs read from physics only: support contacts and downward rays give ON, interior volumes INSIDE.
+
+Never from the layout: the observer looks at `MjData` (body poses, contacts, rays against geoms, interior
+volume sites) and names what it finds with the node that owns each geom or site. It keeps the graph
+incrementally: `update()` re-observes only bodies that moved since they were last observed and have come
+to rest, so sleeping bodies cost one vectorised pose comparison.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from homer_sim.build import FLOOR_GROUP, VOLUME_GROUP
+from homer_sim.catalog import CATALOG
+from homer_sim.errors import PhysicsError
+from homer_sim.graph import INSIDE, NONE, ON, SceneGraph
+from homer_sim.world import SETTLE_SPEED, World
+
+SUPPORT_TOL = 0.02  # m: a support surface may lie this far below an object's lowest point
+MOVED_DISTANCE = 1e-3  # m
+MOVED_COS_HALF_ANGLE = np.cos(np.deg2rad(0.5) / 2)  # |q1 . q2| below this: rotated more than 0.5 degree
+VOLUME_TOL = 0.01  # m of slack around interior volumes
+CONTAINER_FAMILIES = ("bin", "pot")  # objects that hold others INSIDE rather than ON
+_RAY_GROUPS = np.array([1, 1, 1, 0, 0, 0], dtype=np.uint8)
+_FLOOR_GROUPS = np.array([int(g == FLOOR_GROUP) for g in range(6)], dtype=np.uint8)
+_RAY_OFFSETS = np.array([[0, 0], [0.35, 0.35], [-0.35, 0.35], [0.35, -0.35], [-0.35, -0.35]])
+_DOWN = np.array([0.0, 0.0, -1.0])
+
+
+class SceneGraphObserver:
+    """Observes the scene graph of a World; `graph` is the latest observation."""
+
+    def __init__(self, world: World) -> None:
+        self.world = world
+        model = world.model
+        self.nodes = world.layout.node_names()
+        self.categories = world.declared_graph().categories
+        index = {name: i for i, name in enumerate(self.nodes)}
+        roots = model.body_rootid
+        self.body_node = np.array([index.get(model.body(int(roots[b])).name, -1) for b in range(model.nbody)])
+        self.geom_node = self.body_node[model.geom_bodyid]
+        self.movable = np.array([index[n] for n in world.object_names], dtype=np.int32)
+        self.movable_bodies = world.object_body_ids
+        self.half_extents = np.array([np.array(CATALOG[o.cls].size) / 2 for o in world.layout.objects])
+        holds_inside = {i for i, o in zip(self.movable, world.layout.objects, strict=True)
+                        if CATALOG[o.cls].family in CONTAINER_FAMILIES}
+        self.holds_inside = np.array([i in holds_inside for i in range(len(self.nodes))])
+        self.is_movable = np.zeros(len(self.nodes), dtype=bool)
+        self.is_movable[self.movable] = True
+        self.is_room = np.array([c == "room" for c in self.categories])
+        volume_sites = [s for s in range(model.nsite) if model.site_group[s] == VOLUME_GROUP
+                        and "/interior_" in model.site(s).name]
+        self.volume_sites = np.array(volume_sites, dtype=np.int32)
+        self.volume_node = np.array([index[model.site(s).name.split("/")[0]] for s in volume_sites], dtype=np.int32)
+        self.volume_half = model.site_size[self.volume_sites] + VOLUME_TOL
+        self._geomid = np.zeros(1, dtype=np.int32)
+        self._last_pos = np.full((len(self.movable), 3), np.nan)
+        self._last_quat = np.zeros((len(self.movable), 4))
+        self._parent = np.full(len(self.nodes), -1, dtype=np.int32)
+        self._relation = np.zeros(len(self.nodes), dtype=np.int8)
+        self.graph: SceneGraph | None = None
+
+    # --- public -----------------------------------------------------------------------------------------
+    def observe_all(self) -> SceneGraph:
+        """A full observation of every node."""
+        self._observe_static()
+        self._observe(np.arange(len(self.movable)))
+        return self._publish()
+
+    def update(self) -> SceneGraph:
+        """Re-observe the movable bodies that moved since last observed and are now at rest."""
+        if self.graph is None:
+            return self.observe_all()
+        due = self.due()
+        if len(due):
+            self._observe(due)
+            return self._publish()
+        return self.graph
+
+    def due(self) -> np.ndarray:
+        """Indices (into world.object_names) of bodies that moved and came to rest since last observed."""
+        data = self.world.data
+        pos = data.xpos[self.movable_bodies]
+        quat = data.xquat[self.movable_bodies]
+        moved = (np.linalg.norm(pos - self._last_pos, axis=1) > MOVED_DISTANCE) | (
+            np.abs(np.einsum("ij,ij->i", quat, self._last_quat)) < MOVED_COS_HALF_ANGLE)
+        if not moved.any():
+            return np.zeros(0, dtype=np.int64)
+        speed = np.abs(data.cvel[self.movable_bodies]).max(axis=1)
+        return np.flatnonzero(moved & (speed < SETTLE_SPEED))
+
+    # --- observation ------------------------------------------------------------------------------------
+    def _observe_static(self) -> None:
+        """Parents of furniture, appliances and decor: what a ray from just above their base hits."""
+        model, data = self.world.model, self.world.data
+        for body in range(1, model.nbody):
+            node = self.body_node[body]
+            if node < 0 or self.is_room[node] or self.is_movable[node] or model.body_parentid[body] != 0:
+                continue
+            start = data.xpos[body] + np.array([0.0, 0.0, 0.01])
+            hit = self._ray(start, body, _RAY_GROUPS)
+            support = self.geom_node[hit[0]] if hit is not None else -1
+            if support < 0 or self.is_room[support]:
+                self._parent[node], self._relation[node] = self._room_below(start, body), INSIDE
+            else:
+                self._parent[node], self._relation[node] = support, ON
+
+    def _observe(self, which: np.ndarray) -> None:
+        data = self.world.data
+        supports = self._contact_supports()
+        for k in which:
+            body = self.movable_bodies[k]
+            node = self.movable[k]
+            parent, relation = self._classify(k, body, supports.get(int(body), []))
+            if parent >= 0 and not self._creates_cycle(node, parent):
+                self._parent[node], self._relation[node] = parent, relation
+            elif self._parent[node] < 0:  # first observation and nothing sensible: the room below
+                self._parent[node], self._relation[node] = self._room_below(data.xpos[body], body), INSIDE
+            self._last_pos[k] = data.xpos[body]
+            self._last_quat[k] = data.xquat[body]
+
+    def _classify(self, k: int, body: int, contacts: list[tuple[int, float]]) -> tuple[int, int]:
+        """(parent node, relation) of movable k from its supports and the interior volumes around it."""
+        data = self.world.data
+        center = data.xpos[body]
+        half_world = np.abs(data.xmat[body].reshape(3, 3)) @ self.half_extents[k]
+        bottom = center[2] - half_world[2]
+        candidates = [(z, node) for node, z in contacts]
+        for dx, dy in _RAY_OFFSETS:
+            start = center + np.array([dx * half_world[0], dy * half_world[1], 0.0])
+            hit = self._ray(start, body, _RAY_GROUPS)
+            if hit is not None and self.geom_node[hit[0]] >= 0:
+                candidates.append((start[2] - hit[1], int(self.geom_node[hit[0]])))
+        candidates = [(z, node) for z, node in candidates if z >= bottom - SUPPORT_TOL]
+        support = max(candidates)[1] if candidates else -1
+        container = self._container(center)
+        if support >= 0 and self.is_movable[support]:
+            return support, INSIDE if self.holds_inside[support] else ON
+        if container >= 0:
+            return container, INSIDE
+        if support >= 0 and not self.is_room[support]:
+            return support, ON
+        if support >= 0:
+            return support, INSIDE
+        return -1, NONE
+
+    def _contact_supports(self) -> dict[int, list[tuple[int, float]]]:
+        """body -> [(supporting node, contact z)] for awake contacts whose normal points up into the body."""
+        data, model = self.world.data, self.world.model
+        found: dict[int, list[tuple[int, float]]] = {}
+        if data.ncon == 0:
+            return found
+        contacts = data.contact
+        geoms, normal_z, pos_z = contacts.geom, contacts.frame[:, 2], contacts.pos[:, 2]
+        for side, sign in ((1, 1.0), (0, -1.0)):  # the normal points from geom[0] to geom[1]
+            upward = sign * normal_z > 0.7
+            for c in np.flatnonzero(upward):
+                body = int(model.geom_bodyid[geoms[c, side]])
+                other = int(self.geom_node[geoms[c, 1 - side]])
+                if other >= 0:
+                    found.setdefault(body, []).append((other, float(pos_z[c])))
+        return found
+
+    def _container(self, point: np.ndarray) -> int:
+        """The node owning the smallest interior volume that contains `point`, or -1."""
+        data = self.world.data
+        if len(self.volume_sites) == 0:
+            return -1
+        offset = point - data.site_xpos[self.volume_sites]
+        rot = data.site_xmat[self.volume_sites].reshape(-1, 3, 3)
+        local = np.einsum("nji,nj->ni", rot, offset)
+        inside = np.all(np.abs(local) <= self.volume_half, axis=1)
+        if not inside.any():
+            return -1
+        hits = np.flatnonzero(inside)
+        return int(self.volume_node[hits[np.argmin(np.prod(self.volume_half[hits], axis=1))]])
+
+    def _ray(self, start: np.ndarray, exclude_body: int, groups: np.ndarray) -> tuple[int, float] | None:
+        dist = mujoco.mj_ray(self.world.model, self.world.data, start, _DOWN, groups, 1, exclude_body, self._geomid)
+        return None if dist < 0 else (int(self._geomid[0]), float(dist))
+
+    def _room_below(self, point: np.ndarray, exclude_body: int) -> int:
+        hit = self._ray(np.array([point[0], point[1], max(point[2], 0.0) + 0.05]), exclude_body, _FLOOR_GROUPS)
+        if hit is None:
+            raise PhysicsError(f"no floor below {np.round(point, 3).tolist()}: the body left the apartment")
+        return int(self.geom_node[hit[0]])
+
+    def _creates_cycle(self, node: int, parent: int) -> bool:
+        at, hops = parent, 0
+        while at >= 0 and hops <= len(self.nodes):
+            if at == node:
+                return True
+            at, hops = int(self._parent[at]), hops + 1
+        return False
+
+    def _publish(self) -> SceneGraph:
+        self.graph = SceneGraph(self.nodes, self.categories, self._parent.copy(), self._relation.copy())
+        return self.graph
