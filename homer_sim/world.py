@@ -48,7 +48,13 @@ class World:
         if validate:
             validate_layout(self.layout)
         self.spec = build_spec(self.layout)
-        self.model = self.spec.compile()
+        self.compile_warnings: list[str] = []
+        previous = mujoco.get_mju_user_warning()
+        mujoco.set_mju_user_warning(self.compile_warnings.append)
+        try:
+            self.model = self.spec.compile()
+        finally:
+            mujoco.set_mju_user_warning(previous)
         self.data = mujoco.MjData(self.model)
         self.object_names = tuple(o.name for o in self.layout.objects)
         self.object_categories = {name: cls.category for name, cls in CATALOG.items()}
@@ -159,8 +165,8 @@ class World:
         mujoco.mj_step(self.model, self.data, nstep=n)
 
     def warnings(self) -> int:
-        """Total number of MuJoCo warnings raised so far."""
-        return int(sum(w.number for w in self.data.warning))
+        """Total number of MuJoCo warnings so far: at compile time and while stepping."""
+        return len(self.compile_warnings) + int(sum(w.number for w in self.data.warning))
 
     def objects_at_rest(self) -> np.ndarray:
         """Shape (n_objects,), bool: asleep, or moving slower than SETTLE_SPEED."""
