@@ -148,7 +148,7 @@ def _check_swings(layout: Layout, plan: FloorPlan, f: Furniture) -> None:
         corners = local_to_world(f, np.array([[d / 2, -w / 2, 0], [d / 2 + reach, w / 2, 0]]))
         rect = (corners[:, 0].min(), corners[:, 1].min(), corners[:, 0].max(), corners[:, 1].max())
         if not plan.rect_is_free(rect):
-            raise LayoutError(f"{f.name}: the {part.name} swing/travel area {tuple(round(v, 2) for v in rect)} "
+            raise LayoutError(f"{f.name}: the {part.name} swing/travel area {tuple(round(float(v), 2) for v in rect)} "
                               "is blocked by furniture or a wall")
 
 
