@@ -71,7 +71,8 @@ def test_bad_layouts_are_rejected_naming_the_node(layout, node: str, message: st
 
 
 def test_object_that_does_not_fit_is_rejected() -> None:
-    crowded = _with_objects(default_layout(), *(ObjectDecl(f"book_{k}", "book", "table_bedroom", ON) for k in range(12)))
+    books = (ObjectDecl(f"book_{k}", "book", "table_bedroom", ON) for k in range(12))
+    crowded = _with_objects(default_layout(), *books)
     with pytest.raises(LayoutError, match="does not fit") as error:
         validate_layout(crowded)
     assert "book_" in str(error.value) and "table_bedroom" in str(error.value)
