@@ -137,7 +137,7 @@ def read_day(path: str | Path) -> Day:
     path = Path(path)
     try:
         with np.load(path, allow_pickle=False) as archive:
-            info = json.loads(str(archive["info"]))
+            info = json.loads(archive["info"].item())
             return Day(info["household"], info["split"], int(info["index"]), archive["minutes"],
                        archive["parent"], archive["relation"],
                        tuple((a, float(s), float(e)) for a, s, e in info["schedule"]),
