@@ -42,7 +42,7 @@ FURNITURE = (
     # Kitchen row along the south wall of the dining room, fronts facing north.
     _f("fridge", "fridge", "cabinet", "dining_room", (0.5, 0.4), "N", (0.7, 0.7, 1.45), "appliance",
        shelves=(0.45, 0.85), hinge="right", rgba=WHITE, door_mass=5.0),
-    _f("cupboard", "cupboard", "cabinet", "dining_room", (1.3, 0.275), "N", (0.8, 0.45, 1.3),
+    _f("cupboard", "cupboard", "cabinet", "dining_room", (1.3, 0.35), "N", (0.8, 0.6, 1.3),
        shelves=(0.45, 0.85)),
     _f("kitchen_counter_left", "kitchen_counter", "block", "dining_room", (2.1, 0.35), "N", (0.8, 0.6, 0.9)),
     _f("sink_dining_room", "sink", "sink", "dining_room", (2.9, 0.35), "N", (0.8, 0.6, 0.9)),

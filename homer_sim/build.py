@@ -29,6 +29,7 @@ WALL_RGBA = (0.85, 0.83, 0.78, 1.0)
 FLOOR_RGBA = {"outside": (0.45, 0.55, 0.4, 1.0)}
 FURNITURE_FRICTION = (0.9, 0.005, 0.0001)
 CONTACT_SOLREF = (0.005, 1.0)  # stiff enough that a dropped object cannot sink through a 2 cm board
+FREE_DAMPING = 0.002  # N s/m and N m s/rad on free objects: damps the chatter of thin objects, negligible in flight
 
 
 def _configure(spec: mujoco.MjSpec) -> None:
@@ -112,18 +113,24 @@ def _add_objects(spec: mujoco.MjSpec, layout: Layout) -> None:
     for decl in layout.objects:
         pose = poses[decl.name]
         body = spec.worldbody.add_body(name=decl.name, pos=pose.pos, quat=pose.quat)
-        body.add_freejoint(name=decl.name)
+        joint = body.add_freejoint(name=decl.name)
+        joint.damping = (FREE_DAMPING, 0.0, 0.0)
         add_object_geoms(spec, body, CATALOG[decl.cls], prefix=decl.name)
 
 
-def build_spec(layout: Layout) -> mujoco.MjSpec:
-    """The MjSpec of `layout` (not yet compiled). Call `validate_layout` first for clear errors."""
+def build_spec(layout: Layout, with_avatar: bool = False) -> mujoco.MjSpec:
+    """The MjSpec of `layout` (not yet compiled), with the person's avatar if asked.
+    Call `validate_layout` first for clear errors."""
     spec = mujoco.MjSpec()
     _configure(spec)
     _add_floors_and_walls(spec, layout)
     for f in layout.furniture:
         _add_furniture(spec, layout, f)
     _add_objects(spec, layout)
+    if with_avatar:
+        from homer_sim.avatar import add_avatar
+
+        add_avatar(spec, layout.objects[0].name)
     return spec
 
 

@@ -115,3 +115,86 @@ def floor_plan(layout: Layout, resolution: float = RESOLUTION, skip: tuple[str, 
         if f.on is None and f.category != "decor" and f.name not in skip:
             _fill(occupied, origin, resolution, footprint(f), True)
     return FloorPlan(occupied, origin, resolution)
+
+
+def inflate(plan: FloorPlan, radius: float) -> np.ndarray:
+    """Occupancy grown by `radius` m: True where a disk of that radius centred on the cell would touch a wall."""
+    r = int(np.ceil(radius / plan.resolution))
+    blocked = plan.occupied.copy()
+    offsets = [(di, dj) for di in range(-r, r + 1) for dj in range(-r, r + 1) if di * di + dj * dj <= r * r]
+    padded = np.pad(plan.occupied, r, constant_values=True)
+    n, m = plan.occupied.shape
+    for di, dj in offsets:
+        blocked |= padded[r + di : r + di + n, r + dj : r + dj + m]
+    return blocked
+
+
+def find_path(blocked: np.ndarray, plan: FloorPlan, start: tuple[float, float], goal: tuple[float, float],
+              extra_blocked: np.ndarray | None = None) -> list[tuple[float, float]] | None:
+    """A collision-free path (world (x, y) waypoints, m) from start to goal over free cells of `blocked`
+    (8-connected A*), or None. Start and goal snap to the nearest free cell within 0.5 m."""
+    grid = blocked if extra_blocked is None else blocked | extra_blocked
+    s, g = _nearest_free(grid, plan, start), _nearest_free(grid, plan, goal)
+    if s is None or g is None:
+        return None
+    cells = _astar(grid, s, g)
+    if cells is None:
+        return None
+    path = [(plan.origin[0] + (i + 0.5) * plan.resolution, plan.origin[1] + (j + 0.5) * plan.resolution)
+            for i, j in cells]
+    return [start] + path[1:-1] + [goal] if len(path) > 1 else [start, goal]
+
+
+def _nearest_free(grid: np.ndarray, plan: FloorPlan, xy: tuple[float, float]) -> tuple[int, int] | None:
+    i, j = plan.cell(*xy)
+    reach = int(np.ceil(0.5 / plan.resolution))
+    best, best_d = None, None
+    for di in range(-reach, reach + 1):
+        for dj in range(-reach, reach + 1):
+            a, b = i + di, j + dj
+            if 0 <= a < grid.shape[0] and 0 <= b < grid.shape[1] and not grid[a, b]:
+                d = di * di + dj * dj
+                if best_d is None or d < best_d:
+                    best, best_d = (a, b), d
+    return best
+
+
+def _astar(grid: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> list[tuple[int, int]] | None:
+    import heapq
+
+    diagonal = 2 ** 0.5
+    moves = [(1, 0, 1.0), (-1, 0, 1.0), (0, 1, 1.0), (0, -1, 1.0),
+             (1, 1, diagonal), (1, -1, diagonal), (-1, 1, diagonal), (-1, -1, diagonal)]
+
+    def heuristic(c: tuple[int, int]) -> float:
+        dx, dy = abs(c[0] - goal[0]), abs(c[1] - goal[1])
+        return max(dx, dy) + (diagonal - 1) * min(dx, dy)
+
+    came: dict[tuple[int, int], tuple[int, int]] = {}
+    cost = {start: 0.0}
+    frontier = [(heuristic(start), start)]
+    n, m = grid.shape
+    while frontier:
+        _, cell = heapq.heappop(frontier)
+        if cell == goal:
+            path = [cell]
+            while cell in came:
+                cell = came[cell]
+                path.append(cell)
+            return path[::-1]
+        for di, dj, step in moves:
+            nxt = (cell[0] + di, cell[1] + dj)
+            if not (0 <= nxt[0] < n and 0 <= nxt[1] < m) or grid[nxt]:
+                continue
+            if di and dj and (grid[cell[0] + di, cell[1]] or grid[cell[0], cell[1] + dj]):
+                continue  # no corner cutting
+            new = cost[cell] + step
+            if new < cost.get(nxt, np.inf):
+                cost[nxt], came[nxt] = new, cell
+                heapq.heappush(frontier, (new + heuristic(nxt), nxt))
+    return None
+
+
+def path_length(path: list[tuple[float, float]]) -> float:
+    """Length of a waypoint path in m."""
+    return float(sum(np.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(path, path[1:], strict=False)))

@@ -172,7 +172,7 @@ def _door(f: Furniture, d: float, w: float, h: float, plinth: float) -> Part:
     stems = tuple(_box(f"stem_{k}", (PANEL / 2, handle_y - 0.006, handle_z + dz - 0.006),
                        (PANEL / 2 + 0.02, handle_y + 0.006, handle_z + dz + 0.006), METAL) for k, dz in
                   enumerate((-0.06, 0.06)))
-    axis = (0.0, 0.0, -side)  # positive angle swings the free edge out of the front
+    axis = (0.0, 0.0, side)  # positive angle swings the free edge out of the front
     return Part("door", "hinge", anchor, axis, (0.0, 1.57), (door, *stems), handle,
                 damping=f.params.get("door_damping", 1.0), mass=f.params.get("door_mass", 3.0))
 

@@ -8,6 +8,8 @@ to rest, so sleeping bodies cost one vectorised pose comparison.
 
 from __future__ import annotations
 
+from collections.abc import Collection
+
 import mujoco
 import numpy as np
 
@@ -15,14 +17,15 @@ from homer_sim.build import FLOOR_GROUP, VOLUME_GROUP
 from homer_sim.catalog import CATALOG
 from homer_sim.errors import PhysicsError
 from homer_sim.graph import INSIDE, NONE, ON, SceneGraph
-from homer_sim.world import SETTLE_SPEED, World
+from homer_sim.world import World
 
 SUPPORT_TOL = 0.02  # m: a support surface may lie this far below an object's lowest point
+RAY_LIFT = 0.005  # m above an object's lowest point where its downward rays start
 MOVED_DISTANCE = 1e-3  # m
 MOVED_COS_HALF_ANGLE = np.cos(np.deg2rad(0.5) / 2)  # |q1 . q2| below this: rotated more than 0.5 degree
 VOLUME_TOL = 0.01  # m of slack around interior volumes
 CONTAINER_FAMILIES = ("bin", "pot")  # objects that hold others INSIDE rather than ON
-_RAY_GROUPS = np.array([1, 1, 1, 0, 0, 0], dtype=np.uint8)
+_RAY_GROUPS = np.array([1, 1, 0, 0, 0, 0], dtype=np.uint8)  # furniture, objects, floors; not agents (group 2)
 _FLOOR_GROUPS = np.array([int(g == FLOOR_GROUP) for g in range(6)], dtype=np.uint8)
 _RAY_OFFSETS = np.array([[0, 0], [0.35, 0.35], [-0.35, 0.35], [0.35, -0.35], [-0.35, -0.35]])
 _DOWN = np.array([0.0, 0.0, -1.0])
@@ -68,11 +71,17 @@ class SceneGraphObserver:
         self._observe(np.arange(len(self.movable)))
         return self._publish()
 
-    def update(self) -> SceneGraph:
-        """Re-observe the movable bodies that moved since last observed and are now at rest."""
+    def update(self, skip: Collection[int] = ()) -> SceneGraph:
+        """Re-observe the movable bodies that moved since last observed and are now at rest.
+
+        skip: indices (into world.object_names) of bodies not to re-observe now, such as objects in a hand:
+        they keep their last observed parent until they are put down.
+        """
         if self.graph is None:
             return self.observe_all()
         due = self.due()
+        if len(skip):
+            due = due[~np.isin(due, list(skip))]
         if len(due):
             self._observe(due)
             return self._publish()
@@ -87,8 +96,7 @@ class SceneGraphObserver:
             np.abs(np.einsum("ij,ij->i", quat, self._last_quat)) < MOVED_COS_HALF_ANGLE)
         if not moved.any():
             return np.zeros(0, dtype=np.int64)
-        speed = np.abs(data.cvel[self.movable_bodies]).max(axis=1)
-        return np.flatnonzero(moved & (speed < SETTLE_SPEED))
+        return np.flatnonzero(moved & self.world.objects_at_rest())
 
     # --- observation ------------------------------------------------------------------------------------
     def _observe_static(self) -> None:
@@ -117,6 +125,8 @@ class SceneGraphObserver:
                 self._parent[node], self._relation[node] = parent, relation
             elif self._parent[node] < 0:  # first observation and nothing sensible: the room below
                 self._parent[node], self._relation[node] = self._room_below(data.xpos[body], body), INSIDE
+            else:
+                continue  # nothing supports it yet: look again at the next update
             self._last_pos[k] = data.xpos[body]
             self._last_quat[k] = data.xquat[body]
 
@@ -127,12 +137,13 @@ class SceneGraphObserver:
         half_world = np.abs(data.xmat[body].reshape(3, 3)) @ self.half_extents[k]
         bottom = center[2] - half_world[2]
         candidates = [(z, node) for node, z in contacts]
-        for dx, dy in _RAY_OFFSETS:
-            start = center + np.array([dx * half_world[0], dy * half_world[1], 0.0])
+        for dx, dy in _RAY_OFFSETS:  # rays start just above the bottom: what lies in a cavity is not support
+            start = np.array([center[0] + dx * half_world[0], center[1] + dy * half_world[1], bottom + RAY_LIFT])
             hit = self._ray(start, body, _RAY_GROUPS)
             if hit is not None and self.geom_node[hit[0]] >= 0:
                 candidates.append((start[2] - hit[1], int(self.geom_node[hit[0]])))
-        candidates = [(z, node) for z, node in candidates if z >= bottom - SUPPORT_TOL]
+        top = bottom + min(SUPPORT_TOL, 0.3 * half_world[2])
+        candidates = [(z, node) for z, node in candidates if bottom - SUPPORT_TOL <= z <= top]
         support = max(candidates)[1] if candidates else -1
         container = self._container(center)
         if support >= 0 and self.is_movable[support]:

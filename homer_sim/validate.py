@@ -145,7 +145,10 @@ def _check_swings(layout: Layout, plan: FloorPlan, f: Furniture) -> None:
     w, d, _ = f.size
     for part in furniture_geometry(f).parts:
         reach = w if part.joint == "hinge" else part.range[1] + 0.05
-        corners = local_to_world(f, np.array([[d / 2, -w / 2, 0], [d / 2 + reach, w / 2, 0]]))
+        # A door's hinge edge swings a little beyond the side it hangs on.
+        lo = -w / 2 - (0.03 if part.joint == "hinge" and part.anchor[1] < 0 else 0.0)
+        hi = w / 2 + (0.03 if part.joint == "hinge" and part.anchor[1] > 0 else 0.0)
+        corners = local_to_world(f, np.array([[d / 2, lo, 0], [d / 2 + reach, hi, 0]]))
         rect = (corners[:, 0].min(), corners[:, 1].min(), corners[:, 0].max(), corners[:, 1].max())
         if not plan.rect_is_free(rect):
             raise LayoutError(f"{f.name}: the {part.name} swing/travel area {tuple(round(float(v), 2) for v in rect)} "

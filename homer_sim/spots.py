@@ -1,0 +1,181 @@
+"""Where a person stands to reach something, and where an object can be put down.
+
+Standing spots come from the floor plan (a free disk in front of the furniture, within reach). Free
+placements are sampled on a place's rectangle, away from the footprints of objects already there, from
+their current physical poses (never from the layout's declared ones).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from homer_sim.catalog import CATALOG
+from homer_sim.errors import HomerError
+from homer_sim.floorplan import floor_plan, inflate
+from homer_sim.furniture import Place, furniture_geometry
+from homer_sim.graph import INSIDE, ON
+from homer_sim.placement import SPOT_GAP, base_height, place_world
+from homer_sim.validate import base_pose_for
+
+PERSON_RADIUS = 0.25  # m
+PLACE_TRIES = 80
+DROP_LIFT = 0.004  # m above the surface an object is released
+
+
+class PlacementError(HomerError):
+    """No free spot for an object on the place asked for."""
+
+
+@dataclass(frozen=True)
+class Spot:
+    """A target pose for an object: position (m) and yaw (rad), on `place` of `node` (None for a floor)."""
+
+    pos: tuple[float, float, float]
+    yaw: float
+    node: str
+    place: int | None
+
+
+class Spots:
+    """Standing spots and free placements in one World."""
+
+    def __init__(self, world) -> None:
+        self.world = world
+        self.layout = world.layout
+        self.furniture = self.layout.furniture_by_name()
+        self.plan = floor_plan(self.layout)
+        self.blocked = inflate(self.plan, PERSON_RADIUS)
+        self.sizes = np.array([CATALOG[o.cls].size for o in self.layout.objects])
+        self._standing: dict[str, tuple[float, float, float]] = {}
+
+    # --- standing ---------------------------------------------------------------------------------------
+    def standing_for(self, node: str) -> tuple[float, float, float]:
+        """(x, y, yaw) where the person stands to use `node` (furniture, appliance or room)."""
+        if node not in self._standing:
+            self._standing[node] = self._find_standing(node)
+        return self._standing[node]
+
+    def _find_standing(self, node: str) -> tuple[float, float, float]:
+        if node in self.furniture:
+            f = self.furniture[node]
+            if f.on is not None:
+                return self.standing_for(f.on)
+            geometry = furniture_geometry(f)
+            rect = place_world(self.layout, f, geometry.places[0])["rect"] if geometry.places else _footprint_rect(f)
+            pose = base_pose_for(self.layout, self.plan, f, rect, [])
+            if pose is None:
+                raise PlacementError(f"no place to stand in front of {node}")
+            return pose
+        room = next((r for r in self.layout.rooms if r.name == node), None)
+        if room is None:
+            raise PlacementError(f"{node!r} is neither furniture nor a room")
+        return self.free_floor_near(((room.rect[0] + room.rect[2]) / 2, (room.rect[1] + room.rect[3]) / 2), room.name)
+
+    def free_floor_near(self, xy: tuple[float, float], room: str) -> tuple[float, float, float]:
+        """The free standing cell of `room` nearest to `xy` (spiral search), facing +x."""
+        rect = next(r.rect for r in self.layout.rooms if r.name == room)
+        free = ~self.blocked
+        best, best_d = None, math.inf
+        xs, ys = self.plan.cell_centers(0, free.shape[0], 0, free.shape[1])
+        inside = (xs > rect[0]) & (xs < rect[2]) & (ys > rect[1]) & (ys < rect[3]) & free
+        if inside.any():
+            d = (xs - xy[0]) ** 2 + (ys - xy[1]) ** 2
+            d[~inside] = math.inf
+            k = np.unravel_index(np.argmin(d), d.shape)
+            best, best_d = (float(xs[k]), float(ys[k])), d[k]
+        if best is None or not math.isfinite(best_d):
+            raise PlacementError(f"no free floor in {room}")
+        return best[0], best[1], 0.0
+
+    # --- placements -------------------------------------------------------------------------------------
+    @cached_property
+    def _places(self) -> dict[str, list[Place]]:
+        return {f.name: list(furniture_geometry(f).places) for f in self.layout.furniture}
+
+    def places_of(self, node: str, relation: int | None) -> list[tuple[int, Place]]:
+        """Places of furniture `node` with `relation` (None: INSIDE places of a container, else ON places)."""
+        places = list(enumerate(self._places.get(node, [])))
+        if relation is None:
+            inside = [(k, p) for k, p in places if p.relation == INSIDE]
+            return inside or [(k, p) for k, p in places if p.relation == ON]
+        return [(k, p) for k, p in places if p.relation == relation]
+
+    def footprints(self, exclude: set[int]) -> np.ndarray:
+        """Shape (n_objects, 5): world (x0, y0, x1, y1, z_bottom) of every object, nan for excluded ones."""
+        data = self.world.data
+        bodies = self.world.object_body_ids
+        rot = np.abs(data.xmat[bodies].reshape(-1, 3, 3))
+        half = np.einsum("nij,nj->ni", rot, self.sizes / 2)
+        pos = data.xpos[bodies]
+        boxes = np.column_stack([pos[:, 0] - half[:, 0], pos[:, 1] - half[:, 1], pos[:, 0] + half[:, 0],
+                                 pos[:, 1] + half[:, 1], pos[:, 2] - half[:, 2]])
+        boxes[list(exclude)] = np.nan
+        return boxes
+
+    def free_spot(self, name: str, node: str, place_index: int, rng: np.random.Generator,
+                  exclude: set[int]) -> Spot | None:
+        """A random free spot for object `name` on a place of furniture `node` (drawers assumed open)."""
+        f = self.furniture[node]
+        place = self._places[node][place_index]
+        world_place = place_world(self.layout, f, place, opened=place.part is not None)
+        size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        if size[2] > place.clearance - 0.005:
+            return None
+        yaw = f.yaw + math.pi / 2
+        half_x, half_y = _rotated_half(size, yaw)
+        x0, y0, x1, y1 = world_place["rect"]
+        if x1 - x0 < 2 * half_x or y1 - y0 < 2 * half_y:
+            return None
+        z = world_place["z"]
+        boxes = self.footprints(exclude)
+        near = boxes[(boxes[:, 4] > z - 0.05) & (boxes[:, 4] < z + place.clearance)]
+        for _ in range(PLACE_TRIES):
+            x = rng.uniform(x0 + half_x, x1 - half_x)
+            y = rng.uniform(y0 + half_y, y1 - half_y)
+            if not _overlaps_any(near, (x - half_x, y - half_y, x + half_x, y + half_y)):
+                return Spot((float(x), float(y), z + size[2] / 2 + DROP_LIFT), yaw, node, place_index)
+        return None
+
+    def floor_spot(self, name: str, room: str, near: tuple[float, float], rng: np.random.Generator,
+                   exclude: set[int]) -> Spot:
+        """A free spot on the floor of `room` near `near` (m), away from furniture and other objects."""
+        size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        boxes = self.footprints(exclude)
+        boxes = boxes[boxes[:, 4] < 0.05]
+        rect = next(r.rect for r in self.layout.rooms if r.name == room)
+        radius = math.hypot(size[0], size[1]) / 2
+        for attempt in range(PLACE_TRIES):
+            spread = 0.4 + 0.05 * attempt
+            x, y = near[0] + rng.uniform(-spread, spread), near[1] + rng.uniform(-spread, spread)
+            inside = rect[0] + radius < x < rect[2] - radius and rect[1] + radius < y < rect[3] - radius
+            if inside and self.plan.disk_is_free(x, y, radius + 0.02) and not _overlaps_any(
+                    boxes, (x - radius, y - radius, x + radius, y + radius)):
+                return Spot((float(x), float(y), size[2] / 2 + DROP_LIFT), 0.0, room, None)
+        raise PlacementError(f"no free floor for {name} in {room} near {np.round(near, 2).tolist()}")
+
+
+def _rotated_half(size, yaw: float) -> tuple[float, float]:
+    c, s = abs(math.cos(yaw)), abs(math.sin(yaw))
+    return (c * size[0] + s * size[1]) / 2, (s * size[0] + c * size[1]) / 2
+
+
+def _overlaps_any(boxes: np.ndarray, rect: tuple[float, float, float, float]) -> bool:
+    if len(boxes) == 0:
+        return False
+    g = SPOT_GAP
+    hit = (boxes[:, 0] < rect[2] + g) & (rect[0] < boxes[:, 2] + g) & (boxes[:, 1] < rect[3] + g) & (
+        rect[1] < boxes[:, 3] + g)
+    return bool(np.any(hit))
+
+
+def _footprint_rect(f) -> tuple[float, float, float, float]:
+    from homer_sim.furniture import footprint
+
+    return footprint(f)
+
+
+__all__ = ["Spots", "Spot", "PlacementError", "PERSON_RADIUS", "base_height"]
