@@ -95,8 +95,10 @@ class Avatar:
         self.reset()
 
     def reset(self) -> None:
+        """Hands empty, nothing worn, every object colliding again, the root at its start pose."""
         for eq in self.welds:
             self.world.data.eq_active[eq] = 0
+        self.world.model.geom_contype[:], self.world.model.geom_conaffinity[:] = self._geom_types
         self.slots: dict[int, str] = {}
         self.held: dict[str, str | None] = dict.fromkeys(HANDS)
         self.worn: list[str] = []

@@ -267,6 +267,15 @@ class Recording:
             self._stamp(self._physics_s, self._routine_minute)
         self._stream.log("events", rr.TextLog(text, level=level))
 
+    def log_path(self, path: list[tuple[float, float]], routine_minute: float, entity: str = "world/person/path",
+                 height: float = 0.02) -> None:
+        """A walked path (world (x, y) waypoints in m) as a line strip just above the floor, on the routine
+        timeline."""
+        self._require_open()
+        self._stamp(None, _check_minute(routine_minute))
+        points = np.array([[x, y, height] for x, y in path], dtype=np.float32)
+        self._stream.log(entity, rr.LineStrips3D([points], colors=[(240, 160, 40, 255)], radii=0.02))
+
 
 # --- helpers ---------------------------------------------------------------------------------------------
 def _body_path(model: mujoco.MjModel, body_id: int) -> str:
