@@ -34,3 +34,7 @@ def unknown_name(kind: str, name: str, known: Iterable[str], limit: int = 5) -> 
 
 class PhysicsError(HomerError):
     """The simulation reached a state it cannot continue from (an object left the apartment, NaN)."""
+
+
+class HabitError(HomerError):
+    """Household habits that are malformed (wrong length, out of range, unknown activity)."""
