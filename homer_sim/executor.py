@@ -20,9 +20,8 @@ from homer_sim.avatar import Avatar, AvatarError, compose, relative_pose
 from homer_sim.catalog import CATALOG
 from homer_sim.errors import PhysicsError
 from homer_sim.floorplan import find_path
-from homer_sim.graph import INSIDE, RELATION_NAMES, SceneGraph
+from homer_sim.graph import INSIDE, ON, RELATION_NAMES, SceneGraph
 from homer_sim.observe import SceneGraphObserver
-from homer_sim.shapes import cavity
 from homer_sim.spots import PlacementError, Spot, Spots
 from homer_sim.world import World
 
@@ -31,11 +30,10 @@ log = logging.getLogger(__name__)
 TICK_MIN = 10
 DAY_START_MIN = 360
 DAY_END_MIN = 1440
-LIFT_M, LIFT_STEPS = 0.06, 50
+LIFT_M, LIFT_STEPS = 0.06, 30
 SETTLE_S = 3.0
-OPEN_TOL = 0.03  # openness error accepted when driving a door or drawer
-DRIVE = {"hinge": (25.0, 6.0, 12.0), "slide": (300.0, 60.0, 60.0)}  # kp, kd, force limit (SI)
-DRIVE_TIMEOUT_S = 4.0
+DRIVE_PROFILE = {"hinge": (12, 3), "slide": (25, 6)}  # increments, physics steps per increment
+DRIVE_REST_STEPS = 10
 OPEN_ENOUGH = 0.9
 
 
@@ -173,30 +171,32 @@ class Executor:
             raise PhysicsError(f"{name} fell out of the apartment (z = {pos[:, 2].min():.2f} m)")
 
     def drive(self, art, openness: float) -> None:
-        """Move a door or drawer to `openness` by a force-limited PD drive at its joint, the hand on its handle."""
+        """Move a door or drawer to `openness` along a minimum-jerk path, the hand on its handle.
+
+        The joint is moved kinematically in small increments with physics steps in between, so whatever the
+        part touches is pushed and a drawer carries its contents along by friction.
+        """
         model, data = self.world.model, self.world.data
         lo, hi = art.range
-        target = lo + openness * (hi - lo)
-        kp, kd, limit = DRIVE[art.joint_type]
+        start, target = data.qpos[art.qpos_adr], lo + openness * (hi - lo)
+        increments, steps = DRIVE_PROFILE[art.joint_type]
+        dt = steps * model.opt.timestep
         handle = model.site(f"{art.name}/handle").id
         hand = self.avatar.free_hand()  # with both hands full the person pushes it with an elbow
-        steps = int(DRIVE_TIMEOUT_S / model.opt.timestep)
-        self.world.data.qvel[art.dof_adr] += 1e-9  # wake the tree
-        for k in range(steps):
-            q, qd = data.qpos[art.qpos_adr], data.qvel[art.dof_adr]
-            data.qfrc_applied[art.dof_adr] = float(np.clip(kp * (target - q) - kd * qd, -limit, limit))
-            self.world.step(1)
-            if k % 15 == 0 and hand is not None:
+        previous = start
+        for i in range(1, increments + 1):
+            s = i / increments
+            q = start + (target - start) * (10 * s**3 - 15 * s**4 + 6 * s**5)
+            data.qpos[art.qpos_adr] = q
+            data.qvel[art.dof_adr] = (q - previous) / dt + 1e-9  # nonzero: the tree stays awake
+            previous = q
+            self.step(steps)
+            if hand is not None:
                 self.avatar.set_hand(hand, data.site_xpos[handle], follow=False)
-                if self.recording is not None:
-                    self.recording.log_body_poses(data)
-            if abs(self.world.openness(art.name) - openness) < OPEN_TOL and abs(qd) < 0.05:
-                break
-        data.qfrc_applied[art.dof_adr] = 0.0
+        data.qpos[art.qpos_adr], data.qvel[art.dof_adr] = target, 0.0
+        self.step(DRIVE_REST_STEPS)
         if hand is not None:
             self.avatar.set_hand(hand, self.avatar.hand_home(hand), follow=False)
-        if abs(self.world.openness(art.name) - openness) > 0.1:
-            raise AvatarError(f"{art.name} is stuck at openness {self.world.openness(art.name):.2f}")
 
     # --- containers -------------------------------------------------------------------------------------
     def part_holding(self, furniture: str, point: np.ndarray | None) -> list:
@@ -241,7 +241,7 @@ class Executor:
         if self._graph.relation_of(name) == "INSIDE" or container in self.parts:
             self.ensure_open(self.part_holding(container, self.world.object_pose(name)[0]), opened)
         pos, quat = self.world.object_pose(name)
-        self._grabbed_from[name] = (pos.copy(), quat.copy())
+        self._grabbed_from[name] = (pos.copy(), quat.copy(), container)
         riders = [c for c in self._graph.children_of(name) if c in self.movable and c not in self.avatar.carried()]
         hand_body = self.avatar.hands[hand]
         self.avatar.set_hand(hand, pos, follow=False)
@@ -300,19 +300,15 @@ class Executor:
             self.go(target)
             self.release(name, self._on_object(name, target))
         else:
-            self._put_on_furniture(name, target, relation, exclude)
+            self.put_nearby(name, target, relation)
         self.observe()
 
     def _on_object(self, name: str, target: str) -> Spot:
+        """A spot on (or in) object `target`, above whatever already lies there."""
         pos = self.world.object_pose(target)[0]
-        cls, holder = self._cls(name), self._cls(target)
-        jitter = self.rng.uniform(-0.01, 0.01, size=2)
-        if holder.family in ("bin", "pot", "bowl", "cup", "mug"):
-            floor = cavity(holder)
-            z = pos[2] + (floor.floor_z if floor else -holder.size[2] / 2) + cls.size[2] / 2 + 0.01
-        else:
-            z = pos[2] + holder.size[2] / 2 + cls.size[2] / 2 + 0.004
-        return Spot((float(pos[0] + jitter[0]), float(pos[1] + jitter[1]), float(z)), 0.0, target, None)
+        x, y = pos[:2] + self.rng.uniform(-0.01, 0.01, size=2)
+        z = self.spots.landing_z(name, (x, y), pos[2] + self._cls(target).size[2] / 2 + 0.3)
+        return Spot((float(x), float(y), z), 0.0, target, None)
 
     def _put_on_furniture(self, name: str, target: str, relation: int | None, exclude: set[int]) -> None:
         places = self.spots.places_of(target, relation)
@@ -336,11 +332,37 @@ class Executor:
             self.close_parts(opened)
         raise PlacementError(f"no free spot for {name} on {target}")
 
+    def put_nearby(self, name: str, target: str, relation: int | None) -> None:
+        """Put on `target`, or when it is full on the nearest furniture of the same room that has room (a
+        person puts the magazine on the shelf when the counter is full)."""
+        try:
+            self._put_on_furniture(name, target, relation, set(self.carried_indices()))
+            return
+        except PlacementError:
+            if relation == INSIDE:
+                raise
+        for other in self.spots.neighbours(target):
+            try:
+                self._put_on_furniture(name, other, ON, set(self.carried_indices()))
+                log.debug("%s: %s full, put on %s", name, target, other)
+                return
+            except PlacementError:
+                continue
+        raise PlacementError(f"no free spot for {name} on {target} or any furniture near it")
+
     def put_back_where_grabbed(self, name: str) -> None:
+        """Back to the spot it was taken from if that is still free, else anywhere on the same furniture."""
         self.ensure_held(name)
-        pos, quat = self._grabbed_from.get(name, self.world.object_pose(name))
-        yaw = 2 * math.atan2(quat[3], quat[0])
-        self.release(name, Spot(tuple(pos + np.array([0, 0, 0.004])), yaw, "", None))
+        if name not in self._grabbed_from:
+            raise AvatarError(f"cannot put {name} back: it was not taken from anywhere today")
+        pos, quat, anchor = self._grabbed_from[name]
+        bottom = pos[2] - self._cls(name).size[2] / 2
+        z = self.spots.landing_z(name, (pos[0], pos[1]), pos[2] + 0.3)
+        if anchor in self.rooms or z - self._cls(name).size[2] / 2 > bottom + 0.01:
+            self.put(name, anchor, None)
+            return
+        self.go(anchor)
+        self.release(name, Spot((float(pos[0]), float(pos[1]), z), 2 * math.atan2(quat[3], quat[0]), anchor, None))
         self.observe()
 
     def wear(self, name: str) -> None:

@@ -27,7 +27,10 @@ VOLUME_TOL = 0.01  # m of slack around interior volumes
 CONTAINER_FAMILIES = ("bin", "pot")  # objects that hold others INSIDE rather than ON
 _RAY_GROUPS = np.array([1, 1, 0, 0, 0, 0], dtype=np.uint8)  # furniture, objects, floors; not agents (group 2)
 _FLOOR_GROUPS = np.array([int(g == FLOOR_GROUP) for g in range(6)], dtype=np.uint8)
-_RAY_OFFSETS = np.array([[0, 0], [0.35, 0.35], [-0.35, 0.35], [0.35, -0.35], [-0.35, -0.35]])
+# Fractions of the half extents where downward rays start: the centre, and near the rim and corners, so an
+# object bridging a cavity (a spoon across a bowl) still finds what holds it.
+_RAY_OFFSETS = np.array([[0, 0], [0.35, 0.35], [-0.35, 0.35], [0.35, -0.35], [-0.35, -0.35],
+                         [0.9, 0], [-0.9, 0], [0, 0.9], [0, -0.9]])
 _DOWN = np.array([0.0, 0.0, -1.0])
 
 

@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass
 from functools import cached_property
 
+import mujoco
 import numpy as np
 
 from homer_sim.catalog import CATALOG
@@ -22,6 +23,7 @@ from homer_sim.placement import SPOT_GAP, base_height, place_world
 from homer_sim.validate import base_pose_for
 
 PERSON_RADIUS = 0.25  # m
+_RAY_GROUPS = np.array([1, 1, 0, 0, 0, 0], dtype=np.uint8)  # furniture, objects and floors, not agents
 PLACE_TRIES = 80
 DROP_LIFT = 0.004  # m above the surface an object is released
 
@@ -51,6 +53,8 @@ class Spots:
         self.blocked = inflate(self.plan, PERSON_RADIUS)
         self.sizes = np.array([CATALOG[o.cls].size for o in self.layout.objects])
         self._standing: dict[str, tuple[float, float, float]] = {}
+        self._geomid = np.zeros(1, dtype=np.int32)
+        self.keep_out = _keep_out_rects(self.layout)
 
     # --- standing ---------------------------------------------------------------------------------------
     def standing_for(self, node: str) -> tuple[float, float, float]:
@@ -90,6 +94,28 @@ class Spots:
         if best is None or not math.isfinite(best_d):
             raise PlacementError(f"no free floor in {room}")
         return best[0], best[1], 0.0
+
+    def neighbours(self, node: str) -> list[str]:
+        """Other furniture of the same room with ON places, nearest first."""
+        f = self.furniture[node]
+        others = [o for o in self.layout.furniture if o.room == f.room and o.name != node
+                  and any(p.relation == ON for p in self._places[o.name])]
+        return [o.name for o in sorted(others, key=lambda o: math.dist(o.pos, f.pos))]
+
+    def landing_z(self, name: str, xy: tuple[float, float], from_z: float) -> float:
+        """Body z at which object `name` centred at xy rests on what lies below (rays over its footprint)."""
+        model, data = self.world.model, self.world.data
+        body = self.world.object_body_ids[self.world.object_index(name)]
+        size = self.sizes[self.world.object_index(name)]
+        highest = -math.inf
+        for dx, dy in ((0, 0), (0.4, 0.4), (-0.4, 0.4), (0.4, -0.4), (-0.4, -0.4)):
+            start = np.array([xy[0] + dx * size[0], xy[1] + dy * size[1], from_z])
+            dist = mujoco.mj_ray(model, data, start, np.array([0.0, 0.0, -1.0]), _RAY_GROUPS, 1, body, self._geomid)
+            if dist >= 0:
+                highest = max(highest, from_z - dist)
+        if not math.isfinite(highest):
+            raise PlacementError(f"nothing below {np.round(xy, 2).tolist()} to put {name} on")
+        return float(highest + size[2] / 2 + DROP_LIFT)
 
     # --- placements -------------------------------------------------------------------------------------
     @cached_property
@@ -133,9 +159,12 @@ class Spots:
         z = world_place["z"]
         boxes = self.footprints(exclude)
         near = boxes[(boxes[:, 4] > z - 0.05) & (boxes[:, 4] < z + place.clearance)]
-        for _ in range(PLACE_TRIES):
-            x = rng.uniform(x0 + half_x, x1 - half_x)
-            y = rng.uniform(y0 + half_y, y1 - half_y)
+        candidates = [(rng.uniform(x0 + half_x, x1 - half_x), rng.uniform(y0 + half_y, y1 - half_y))
+                      for _ in range(PLACE_TRIES)]
+        # then a systematic scan, so a crowded shelf with one gap left still finds it
+        candidates += [(x, y) for x in np.arange(x0 + half_x, x1 - half_x + 1e-9, 0.02)
+                       for y in np.arange(y0 + half_y, y1 - half_y + 1e-9, 0.02)]
+        for x, y in candidates:
             if not _overlaps_any(near, (x - half_x, y - half_y, x + half_x, y + half_y)):
                 return Spot((float(x), float(y), z + size[2] / 2 + DROP_LIFT), yaw, node, place_index)
         return None
@@ -152,10 +181,27 @@ class Spots:
             spread = 0.4 + 0.05 * attempt
             x, y = near[0] + rng.uniform(-spread, spread), near[1] + rng.uniform(-spread, spread)
             inside = rect[0] + radius < x < rect[2] - radius and rect[1] + radius < y < rect[3] - radius
-            if inside and self.plan.disk_is_free(x, y, radius + 0.02) and not _overlaps_any(
+            if inside and self.plan.disk_is_free(x, y, radius + 0.02, self.keep_out) and not _overlaps_any(
                     boxes, (x - radius, y - radius, x + radius, y + radius)):
                 return Spot((float(x), float(y), size[2] / 2 + DROP_LIFT), 0.0, room, None)
         raise PlacementError(f"no free floor for {name} in {room} near {np.round(near, 2).tolist()}")
+
+
+def _keep_out_rects(layout) -> list[tuple[float, float, float, float]]:
+    """World rectangles in front of doors and drawers (their swing and a person's room to use them), where
+    nothing may be left on the floor."""
+    from homer_sim.furniture import local_to_world
+
+    rects = []
+    for f in layout.furniture:
+        parts = furniture_geometry(f).parts
+        if not parts or f.on is not None:
+            continue
+        w, d, _ = f.size
+        reach = max(w if p.joint == "hinge" else p.range[1] for p in parts) + 0.3
+        corners = local_to_world(f, np.array([[d / 2, -w / 2 - 0.05, 0], [d / 2 + reach, w / 2 + 0.05, 0]]))
+        rects.append((corners[:, 0].min(), corners[:, 1].min(), corners[:, 0].max(), corners[:, 1].max()))
+    return rects
 
 
 def _rotated_half(size, yaw: float) -> tuple[float, float]:
