@@ -172,6 +172,17 @@ def cmd_simulate_day(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_compat_check(args: argparse.Namespace) -> int:
+    from homer_sim.compat import compat_check
+
+    result = compat_check(args.scripts, progress=not args.json)
+    share = result["executed"] / result["scripts"]
+    lines = [f"{result['executed']} of {result['scripts']} scripts executed ({share:.0%})"]
+    lines += [f"  {f['script']}:{f['line']}: {f['reason']}" for f in result["failures"]]
+    _print(result, args.json, lines)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="homer", description="homer-sim: proactive robot assistance in physics")
     parser.add_argument("-v", "--verbose", action="store_true", help="log diagnostics to stderr")
@@ -223,6 +234,11 @@ def build_parser() -> argparse.ArgumentParser:
     day.add_argument("--rrd", type=Path, default=None, help="write a rerun recording of the day here")
     day.add_argument("--json", action="store_true", help="print one JSON object")
     day.set_defaults(func=cmd_simulate_day)
+
+    compat = commands.add_parser("compat-check", help="run every script of a HOMER-style folder in our apartment")
+    compat.add_argument("--scripts", type=Path, required=True, help="folder laid out <activity>/<name>.txt")
+    compat.add_argument("--json", action="store_true", help="print one JSON object")
+    compat.set_defaults(func=cmd_compat_check)
     return parser
 
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from homer_sim.avatar import Avatar, AvatarError, compose, relative_pose
 from homer_sim.catalog import CATALOG
-from homer_sim.errors import PhysicsError
+from homer_sim.errors import HomerError, PhysicsError
 from homer_sim.floorplan import find_path
 from homer_sim.graph import INSIDE, ON, RELATION_NAMES, SceneGraph
 from homer_sim.observe import SceneGraphObserver
@@ -35,6 +35,14 @@ SETTLE_S = 3.0
 DRIVE_PROFILE = {"hinge": (12, 3), "slide": (25, 6)}  # increments, physics steps per increment
 DRIVE_REST_STEPS = 10
 OPEN_ENOUGH = 0.9
+
+
+class ActionError(HomerError):
+    """An action of an activity's script could not be carried out; names the activity, line and reason."""
+
+    def __init__(self, activity: str, action, cause: Exception) -> None:
+        self.activity, self.line, self.reason = activity, getattr(action, "line", 0), str(cause)
+        super().__init__(f"{activity}, line {self.line} ({getattr(action, 'text', action)}): {cause}")
 
 
 @dataclass
@@ -378,6 +386,10 @@ class Executor:
         self.avatar.worn.append(name)
 
     def take_off(self, name: str) -> None:
+        if self.avatar.hand_of(name) is not None:
+            return
+        if name not in self.avatar.worn:
+            raise AvatarError(f"cannot take off {name}: it is not worn")
         hand = self.avatar.free_hand()
         if hand is None:
             raise AvatarError(f"cannot take off {name}: both hands are full")
@@ -434,6 +446,18 @@ class Executor:
         if node not in self.avatar.carried():
             self.go(node)
 
+    def _perform(self, activity: str, action) -> None:
+        try:
+            self.do(action)
+        except HomerError as error:
+            raise ActionError(activity, action, error) from error
+
+    def run_activity(self, script, start: float, end: float) -> None:
+        """Carry out one script over routine minutes [start, end], without snapshots."""
+        for minute, action in timed_actions(script, start, end, self.rng):
+            self.minute = minute
+            self._perform(script.activity, action)
+
     def run_day(self, entries, scripts: Mapping, rng: np.random.Generator) -> DayLog:
         """Live one day: `entries` are (activity, start_min, end_min) in time order, `scripts` maps each
         activity to the script this household uses. Snapshots every TICK_MIN routine minutes."""
@@ -453,7 +477,7 @@ class Executor:
                 if event[1] != current and self.recording is not None:
                     self.recording.log_event(f"{event[1]} starts", routine_minute=event[0])
                 current = event[1]
-                self.do(event[2])
+                self._perform(event[1], event[2])
                 event = next(pending, None)
             self.tick(minute)
         return self.log

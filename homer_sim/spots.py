@@ -167,6 +167,11 @@ class Spots:
         for x, y in candidates:
             if not _overlaps_any(near, (x - half_x, y - half_y, x + half_x, y + half_y)):
                 return Spot((float(x), float(y), z + size[2] / 2 + DROP_LIFT), yaw, node, place_index)
+        if CATALOG[self.layout.objects[self.world.object_index(name)].cls].family == "cloth":
+            for x, y in candidates[:PLACE_TRIES]:  # soft things pile up: on top of what is there
+                landing = self.landing_z(name, (x, y), z + place.clearance)
+                if landing + size[2] / 2 <= z + place.clearance:
+                    return Spot((float(x), float(y), landing), yaw, node, place_index)
         return None
 
     def floor_spot(self, name: str, room: str, near: tuple[float, float], rng: np.random.Generator,
