@@ -203,6 +203,7 @@ class Executor:
                 self.avatar.set_hand(hand, data.site_xpos[handle], follow=False)
         data.qpos[art.qpos_adr], data.qvel[art.dof_adr] = target, 0.0
         self.step(DRIVE_REST_STEPS)
+        self.settle()  # what the part carried or pushed comes to rest
         if hand is not None:
             self.avatar.set_hand(hand, self.avatar.hand_home(hand), follow=False)
 

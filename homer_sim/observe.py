@@ -17,6 +17,7 @@ from homer_sim.build import FLOOR_GROUP, VOLUME_GROUP
 from homer_sim.catalog import CATALOG
 from homer_sim.errors import PhysicsError
 from homer_sim.graph import INSIDE, NONE, ON, SceneGraph
+from homer_sim.shapes import cavity
 from homer_sim.world import World
 
 SUPPORT_TOL = 0.02  # m: a support surface may lie this far below an object's lowest point
@@ -25,6 +26,7 @@ MOVED_DISTANCE = 1e-3  # m
 MOVED_COS_HALF_ANGLE = np.cos(np.deg2rad(0.5) / 2)  # |q1 . q2| below this: rotated more than 0.5 degree
 VOLUME_TOL = 0.01  # m of slack around interior volumes
 CONTAINER_FAMILIES = ("bin", "pot")  # objects that hold others INSIDE rather than ON
+CAVITY_HEADROOM = 0.05  # m above a bin's rim that still counts as in it (a heap)
 _RAY_GROUPS = np.array([1, 1, 0, 0, 0, 0], dtype=np.uint8)  # furniture, objects, floors; not agents (group 2)
 _FLOOR_GROUPS = np.array([int(g == FLOOR_GROUP) for g in range(6)], dtype=np.uint8)
 # Fractions of the half extents where downward rays start: the centre, and near the rim and corners, so an
@@ -52,6 +54,11 @@ class SceneGraphObserver:
         holds_inside = {i for i, o in zip(self.movable, world.layout.objects, strict=True)
                         if CATALOG[o.cls].family in CONTAINER_FAMILIES}
         self.holds_inside = np.array([i in holds_inside for i in range(len(self.nodes))])
+        self.supports = np.zeros(len(self.nodes), dtype=bool)
+        self.supports[[i for i, o in zip(self.movable, world.layout.objects, strict=True)
+                       if CATALOG[o.cls].supports]] = True
+        self.cavities = [(k, cavity(CATALOG[o.cls])) for k, o in enumerate(world.layout.objects)
+                         if CATALOG[o.cls].family in CONTAINER_FAMILIES]
         self.is_movable = np.zeros(len(self.nodes), dtype=bool)
         self.is_movable[self.movable] = True
         self.is_room = np.array([c == "room" for c in self.categories])
@@ -148,16 +155,31 @@ class SceneGraphObserver:
         top = bottom + min(SUPPORT_TOL, 0.3 * half_world[2])
         candidates = [(z, node) for z, node in candidates if bottom - SUPPORT_TOL <= z <= top]
         support = max(candidates)[1] if candidates else -1
-        container = self._container(center)
-        if support >= 0 and self.is_movable[support]:
+        if support >= 0 and self.supports[support]:  # a plate, a bowl, a bin: what holds objects
             return support, INSIDE if self.holds_inside[support] else ON
-        if container >= 0:
+        container = self._object_container(k, center)
+        if container < 0:
+            container = self._container(center)
+        if container >= 0:  # a pile of clothes in the basket is INSIDE the basket
             return container, INSIDE
         if support >= 0 and not self.is_room[support]:
             return support, ON
         if support >= 0:
             return support, INSIDE
         return -1, NONE
+
+    def _object_container(self, k: int, point: np.ndarray) -> int:
+        """The container object (bin or pot) whose cavity holds `point`, other than movable k itself, or -1."""
+        data = self.world.data
+        for j, hollow in self.cavities:
+            if j == k:
+                continue
+            body = self.movable_bodies[j]
+            local = data.xmat[body].reshape(3, 3).T @ (point - data.xpos[body])
+            radial = np.hypot(local[0] - hollow.center_xy[0], local[1] - hollow.center_xy[1])
+            if radial <= hollow.rim_radius and hollow.floor_z - 0.01 <= local[2] <= hollow.rim_z + CAVITY_HEADROOM:
+                return int(self.movable[j])
+        return -1
 
     def _contact_supports(self) -> dict[int, list[tuple[int, float]]]:
         """body -> [(supporting node, contact z)] for awake contacts whose normal points up into the body."""
