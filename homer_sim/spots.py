@@ -25,6 +25,7 @@ from homer_sim.validate import base_pose_for
 PERSON_RADIUS = 0.25  # m
 _RAY_GROUPS = np.array([1, 1, 0, 0, 0, 0], dtype=np.uint8)  # furniture, objects and floors, not agents
 PLACE_TRIES = 80
+CONTAINER_KINDS = ("cabinet", "sink", "shower")  # furniture whose everyday use is putting things inside
 DROP_LIFT = 0.004  # m above the surface an object is released
 
 
@@ -123,11 +124,13 @@ class Spots:
         return {f.name: list(furniture_geometry(f).places) for f in self.layout.furniture}
 
     def places_of(self, node: str, relation: int | None) -> list[tuple[int, Place]]:
-        """Places of furniture `node` with `relation` (None: INSIDE places of a container, else ON places)."""
+        """Places of furniture `node` with `relation`. None means as the furniture is used: inside what is
+        built to hold things inside (cabinets, appliances with doors, sinks, showers), else on top."""
         places = list(enumerate(self._places.get(node, [])))
         if relation is None:
-            inside = [(k, p) for k, p in places if p.relation == INSIDE]
-            return inside or [(k, p) for k, p in places if p.relation == ON]
+            first = INSIDE if self.furniture[node].kind in CONTAINER_KINDS else ON
+            preferred = [(k, p) for k, p in places if p.relation == first]
+            return preferred or places
         return [(k, p) for k, p in places if p.relation == relation]
 
     def footprints(self, exclude: set[int]) -> np.ndarray:
