@@ -151,6 +151,8 @@ class Executor(Handling):
             if self.recording is not None:
                 self.recording.log_path(path, routine_minute=self.minute)
         self.avatar.move_to(x, y, yaw)
+        if self.recording is not None:
+            self.recording.log_body_poses(self.world.data, force=True)
 
     # --- script actions ---------------------------------------------------------------------------------
     def open(self, furniture: str) -> None:
@@ -196,6 +198,8 @@ class Executor(Handling):
             self.go(node)
 
     def _perform(self, activity: str, action) -> None:
+        if self.recording is not None:
+            self.recording.set_routine_time(self.minute)
         try:
             self.do(action)
         except HomerError as error:

@@ -167,7 +167,7 @@ class Recording:
         return 1
 
     # --- poses ---------------------------------------------------------------------------------------
-    def log_body_poses(self, data: mujoco.MjData, physics_time: float | None = None) -> int:
+    def log_body_poses(self, data: mujoco.MjData, physics_time: float | None = None, force: bool = False) -> int:
         """Log the world pose of every moving body that moved since it was last logged.
 
         data: the live simulation data, after `mj_forward` or `mj_step` (reads `xpos`, `xquat`).
@@ -175,7 +175,8 @@ class Recording:
         "Moved" means more than MOVED_DISTANCE_M (0.5 mm) or MOVED_ANGLE_RAD (0.5 deg); the first call
         after `log_geometry` logs every moving body. A call less than POSE_PERIOD_S (1/30 s) of physics
         time after the previous logged call logs nothing. A clock that went backwards (a reset) logs.
-        Rows also carry the current routine clock (see `set_routine_time`).
+        Rows also carry the current routine clock (see `set_routine_time`). `force` skips the rate limit
+        (for kinematic moves, such as the person walking, that take routine time but no physics time).
         Returns the number of bodies logged.
         """
         self._require_open()
@@ -188,7 +189,7 @@ class Recording:
         time_s = float(data.time if physics_time is None else physics_time)
         self._physics_s = time_s
         last = self._last_pose_time_s
-        if last is not None and 0.0 <= time_s - last < POSE_PERIOD_S - _TIME_EPS_S:
+        if not force and last is not None and 0.0 <= time_s - last < POSE_PERIOD_S - _TIME_EPS_S:
             return 0
         pos = data.xpos[self._moving_ids]
         quat = data.xquat[self._moving_ids]
