@@ -6,6 +6,7 @@ and reports articulation openness. Scene graphs are read by `homer_sim.observe.S
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import mujoco
@@ -44,11 +45,16 @@ class World:
     object_names: movable nodes (objects and props) in layout order; object_body_ids aligns with it.
     """
 
-    def __init__(self, layout: Layout | None = None, validate: bool = True, with_avatar: bool = False) -> None:
+    def __init__(self, layout: Layout | None = None, validate: bool = True, with_avatar: bool = False,
+                 extras: Sequence[Callable[[mujoco.MjSpec], None]] = ()) -> None:
+        """extras: functions that add to the spec before it is compiled (the robot, from `planners`), so the
+        core never imports what is built on it."""
         self.layout = layout or default_layout()
         if validate:
             validate_layout(self.layout)
         self.spec = build_spec(self.layout, with_avatar=with_avatar)
+        for extra in extras:
+            extra(self.spec)
         self.compile_warnings: list[str] = []
         previous = mujoco.get_mju_user_warning()
         mujoco.set_mju_user_warning(self.compile_warnings.append)
