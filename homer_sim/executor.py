@@ -63,6 +63,7 @@ class Executor(Handling):
         self.nodes = world.layout.node_names()
         self.movable = set(world.object_names)
         self.rooms = set(world.layout.room_names())
+        self._object_of_body = {int(b): n for b, n in zip(world.object_body_ids, world.object_names, strict=True)}
         self.parts = {}
         for art in world.articulations.values():
             self.parts.setdefault(art.furniture, []).append(art)

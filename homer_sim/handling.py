@@ -24,7 +24,7 @@ log = logging.getLogger(__name__)
 
 LIFT_M, LIFT_STEPS = 0.06, 30
 SETTLE_S = 3.0
-DRIVE_PROFILE = {"hinge": (12, 3), "slide": (25, 6)}  # increments, physics steps per increment
+DRIVE_PROFILE = {"hinge": (16, 5), "slide": (25, 6)}  # increments, physics steps per increment
 DRIVE_REST_STEPS = 10
 OPEN_ENOUGH = 0.9
 
@@ -74,6 +74,10 @@ class Handling:
             data.qvel[art.dof_adr] = (q - previous) / dt + 1e-9  # nonzero: the tree stays awake
             previous = q
             self.step(steps)
+            blocker = self._door_blocked(art) if art.joint_type == "hinge" else None
+            if blocker is not None:
+                data.qpos[art.qpos_adr], data.qvel[art.dof_adr] = q - (q - start) / i, 0.0
+                raise AvatarError(f"{art.name} is blocked by {blocker} at openness {self.world.openness(art.name):.2f}")
             if hand is not None:
                 self.avatar.set_hand(hand, data.site_xpos[handle], follow=False)
         data.qpos[art.qpos_adr], data.qvel[art.dof_adr] = target, 0.0
@@ -81,6 +85,19 @@ class Handling:
         self.settle()  # what the part carried or pushed comes to rest
         if hand is not None:
             self.avatar.set_hand(hand, self.avatar.hand_home(hand), follow=False)
+
+    def _door_blocked(self, art) -> str | None:
+        """The object a swinging door touches, if any (a door never shoves things out of its way)."""
+        model, data = self.world.model, self.world.data
+        if data.ncon == 0:
+            return None
+        door = model.jnt_bodyid[art.joint_id]
+        bodies = model.geom_bodyid[data.contact.geom]
+        for a, b in bodies:
+            other = b if a == door else a if b == door else None
+            if other is not None and other in self._object_of_body:
+                return self._object_of_body[other]
+        return None
 
     # --- containers -------------------------------------------------------------------------------------
     def part_holding(self, furniture: str, point: np.ndarray | None) -> list:

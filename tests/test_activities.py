@@ -16,7 +16,7 @@ from homer_sim.households import ACTIVITIES
 from homer_sim.scripts import Script, SymbolicResult, symbolic_run
 
 TWO_VARIANTS = {"breakfast", "lunch", "dinner", "brushing_teeth", "showering", "getting_dressed", "computer_work",
-                "watching_tv", "reading", "wash_dishes"}
+                "watching_tv", "reading", "wash_dishes", "leave_home", "come_home"}
 DURATION_BOUNDS = {  # activity -> (lowest allowed min, highest allowed max), routine minutes
     "breakfast": (15, 35), "lunch": (12, 40), "dinner": (30, 90), "brushing_teeth": (2, 8), "showering": (10, 25),
     "computer_work": (30, 180), "leave_home": (2, 6), "come_home": (2, 10), "take_out_trash": (1, 6),
@@ -55,7 +55,7 @@ def run(script: Script, after: SymbolicResult | None = None) -> SymbolicResult:
 
 def run_from_start(script: Script) -> SymbolicResult:
     if script.activity == "come_home":
-        return run(script, after=run(library()["leave_home"][0]))
+        return run(script, after=run(library()["leave_home"][int(script.variant)]))  # come home as one left
     return run(script)
 
 

@@ -26,7 +26,7 @@ HOMER_FOLDER = Path(__file__).resolve().parents[2] / "shared" / "homer_reference
 MIN_DISTINCTNESS = 1.5
 # Script variants the households may name (scripts module owns the real counts; 1 for unlisted activities).
 TWO_VARIANTS = ("breakfast", "lunch", "dinner", "brushing_teeth", "showering", "getting_dressed", "computer_work",
-                "watching_tv", "reading", "wash_dishes")
+                "watching_tv", "reading", "wash_dishes", "leave_home", "come_home")
 
 
 @pytest.fixture(scope="module")
