@@ -1,0 +1,112 @@
+"""Joint-space control of the robot in the apartment: IK configurations become smooth `data.ctrl` targets.
+
+`Controller` maps the robot-only configuration (shape (13,), `IKSolver.model` order) to the apartment's robot
+joints and actuators (looked up once by name), and moves along min-jerk trajectories through configurations,
+writing the position targets into `data.ctrl` every control step while physics runs. It never writes qpos.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import mujoco
+import numpy as np
+
+from planners.ik import JOINT_SPEEDS
+from planners.robot import ACTUATORS, BODY_JOINTS, FINGER_JOINTS, GRIPPER_MAX, PREFIX
+
+CONTROL_STEPS = 5  # physics steps per control step (0.01 s at the apartment's 2 ms timestep)
+SPEED_FRACTION = 0.5  # planned peak joint speed as a fraction of the limit
+MIN_DURATION = 0.3  # s
+MIN_JERK_PEAK = 1.875  # peak speed of a min-jerk profile over its mean speed
+
+
+def min_jerk(s: np.ndarray | float) -> np.ndarray | float:
+    """Min-jerk time scaling: 0 -> 0, 1 -> 1 with zero velocity and acceleration at both ends."""
+    s = np.clip(s, 0.0, 1.0)
+    return s**3 * (10.0 - 15.0 * s + 6.0 * s**2)
+
+
+class Controller:
+    """Position targets for the robot in a World with the robot attached under `prefix`."""
+
+    def __init__(self, world, prefix: str = PREFIX) -> None:
+        model = world.model
+        self.world = world
+        self.qpos_adr = np.array([model.joint(prefix + n).qposadr[0] for n in BODY_JOINTS + FINGER_JOINTS])
+        self.dof_adr = np.array([model.joint(prefix + n).dofadr[0] for n in BODY_JOINTS + FINGER_JOINTS])
+        self.actuator_ids = np.array([model.actuator(prefix + n).id for n in ACTUATORS])
+        gain = model.actuator_gainprm[self.actuator_ids, 0]
+        # ctrl = target - offset: the base actuators are biased by their start pose (see planners.robot)
+        self.ctrl_offset = model.actuator_biasprm[self.actuator_ids, 0] / gain
+        self.speeds = np.array([JOINT_SPEEDS[n] for n in BODY_JOINTS])
+        self.n_body = len(BODY_JOINTS)
+        self.target = self.q()
+        self.grip_target = float(np.mean(self.target[self.n_body:]))
+
+    def q(self) -> np.ndarray:
+        """Current robot configuration, shape (13,), in the robot-only model's order."""
+        return self.world.data.qpos[self.qpos_adr].copy()
+
+    def command(self, q_body: np.ndarray, grip: float | None = None) -> None:
+        """Write targets: q_body shape (11,) or (13,) (base, torso, arm[, fingers]); grip: opening per finger, m."""
+        self.target[: self.n_body] = q_body[: self.n_body]
+        if grip is not None:
+            self.grip_target = float(np.clip(grip, 0.0, GRIPPER_MAX))
+        ctrl = np.append(self.target[: self.n_body], self.grip_target)
+        self.world.data.ctrl[self.actuator_ids] = ctrl - self.ctrl_offset
+
+    def duration(self, q_from: np.ndarray, q_to: np.ndarray) -> float:
+        """Time in s for a min-jerk move whose peak joint speed stays at SPEED_FRACTION of the limits."""
+        delta = np.abs(q_to[: self.n_body] - q_from[: self.n_body])
+        return max(MIN_DURATION, float(np.max(MIN_JERK_PEAK * delta / (SPEED_FRACTION * self.speeds))))
+
+    def move_through(self, waypoints: Sequence[np.ndarray], duration: float | None = None,
+                     grip: float | None = None, abort: Callable[[], bool] | None = None) -> bool:
+        """Follow configurations (each shape (13,)) from the current target, piecewise linear in joint space
+        with one min-jerk time scaling over the whole path; returns False if `abort()` became True."""
+        path = np.array([self.target] + [np.asarray(w, dtype=float) for w in waypoints])
+        seg = np.linalg.norm((path[1:] - path[:-1])[:, : self.n_body] / self.speeds, axis=1)
+        total = float(seg.sum())
+        if duration is None:
+            duration = sum(self.duration(a, b) for a, b in zip(path[:-1], path[1:], strict=True))
+            duration = max(duration, MIN_DURATION)
+        cumulative = np.concatenate([[0.0], np.cumsum(seg)]) / (total if total > 0 else 1.0)
+        dt = CONTROL_STEPS * self.world.model.opt.timestep
+        for k in range(1, int(np.ceil(duration / dt)) + 1):
+            s = float(min_jerk(k * dt / duration)) if total > 0 else 1.0
+            i = min(int(np.searchsorted(cumulative, s, side="right")) - 1, len(seg) - 1)
+            u = 0.0 if seg[i] == 0 else (s - cumulative[i]) / (cumulative[i + 1] - cumulative[i])
+            self.command(path[i] + np.clip(u, 0.0, 1.0) * (path[i + 1] - path[i]), grip)
+            self.world.step(CONTROL_STEPS)
+            if abort is not None and abort():
+                return False
+        return True
+
+    def settle(self, tolerance: float = 0.01, max_seconds: float = 1.0) -> float:
+        """Step until every body joint is within `tolerance` (m or rad) of its target; returns the final error."""
+        error = np.inf
+        start = self.world.data.time
+        while self.world.data.time - start < max_seconds:
+            self.world.step(CONTROL_STEPS)
+            error = float(np.max(np.abs(self.q()[: self.n_body] - self.target[: self.n_body])))
+            if error < tolerance:
+                break
+        return error
+
+    def set_grip(self, opening: float, seconds: float = 0.6) -> float:
+        """Drive the fingers to `opening` m per finger (0 closes with the actuator's force limit) and wait;
+        returns the measured opening per finger in m."""
+        self.command(self.target, grip=opening)
+        self.world.step(int(round(seconds / self.world.model.opt.timestep)))
+        return float(np.mean(self.q()[self.n_body:]))
+
+    def finger_speed(self) -> float:
+        """Largest finger joint speed, m/s."""
+        return float(np.max(np.abs(self.world.data.qvel[self.dof_adr[self.n_body:]])))
+
+
+def robot_geom_ids(model: mujoco.MjModel, prefix: str = PREFIX) -> np.ndarray:
+    """Ids of every geom on a robot body."""
+    names = [model.body(model.geom_bodyid[g]).name for g in range(model.ngeom)]
+    return np.array([g for g, n in enumerate(names) if n.startswith(prefix)], dtype=np.int32)

@@ -1,0 +1,177 @@
+"""Inverse kinematics of the robot: the only module of homer-sim that imports mink.
+
+IK runs on a robot-only model compiled from `assets/robot/robot.xml` (13 joints, base at the world origin, so
+base qpos read world coordinates exactly as in the apartment). A solve integrates mink's differential IK from a
+start configuration until the grip site reaches the target pose, or reports why it cannot. Tasks: a frame task
+on the grip site, a posture task towards the start configuration, and damping on the base (heavy while
+grasping, so the arm and torso do the work). Limits: joint ranges, joint speeds, and collision avoidance
+between the arm and the base and torso.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mink
+import mujoco
+import numpy as np
+
+from homer_sim.errors import HomerError
+from planners.robot import (
+    ARM_GEOMS,
+    ARM_JOINTS,
+    BASE_GEOMS,
+    BASE_JOINTS,
+    FINGER_JOINTS,
+    GRIP_SITE,
+    TORSO_JOINT,
+    load_robot_spec,
+)
+
+# Joint speed limits (rad/s or m/s), Fetch's published maxima; the base at Fetch's 1.0 m/s and ~1.7 rad/s.
+JOINT_SPEEDS = {"base_x": 1.0, "base_y": 1.0, "base_yaw": 1.7, "torso_lift": 0.1, "shoulder_pan": 1.256,
+                "shoulder_lift": 1.454, "upperarm_roll": 1.571, "elbow_flex": 1.521, "forearm_roll": 1.571,
+                "wrist_flex": 2.268, "wrist_roll": 2.268}
+POSITION_TOL = 0.005  # m
+ORIENTATION_TOL = np.deg2rad(2.0)  # rad
+SOLVER = "daqp"
+# Arm seeds (torso, then the 7 arm joints) tried after the start configuration: elbow up in front, and low.
+SEEDS = (np.array([0.2, 0.0, -0.8, 0.0, 1.6, 0.0, 0.8, 0.0]), np.array([0.0, 0.0, 0.5, 0.0, 1.2, 0.0, -0.2, 0.0]))
+
+
+class IKError(HomerError):
+    """An IK request that is malformed (bad shape, non-unit quaternion, unknown option)."""
+
+
+@dataclass(frozen=True)
+class IKResult:
+    """The outcome of one solve.
+
+    q: final configuration, shape (nq,) of the robot-only model. converged: both tolerances met.
+    position_error: m; orientation_error: rad; iterations: steps taken; errors: position error (m) after
+    each step, shape (iterations,); reason: empty when converged, else why not.
+    """
+
+    q: np.ndarray
+    converged: bool
+    position_error: float
+    orientation_error: float
+    iterations: int
+    errors: np.ndarray
+    reason: str = ""
+
+
+def robot_model() -> mujoco.MjModel:
+    """The robot-only model; robot geoms may collide with each other here so mink can keep the arm off the base."""
+    spec = load_robot_spec()
+    for geom in spec.geoms:
+        if geom.contype:
+            geom.conaffinity = geom.conaffinity | geom.contype
+    return spec.compile()
+
+
+class IKSolver:
+    """Differential IK on the robot-only model (its own MjData: IK never touches the live simulation).
+
+    dt: integration step of one IK iteration in s (bounds each step through the speed limits).
+    """
+
+    def __init__(self, dt: float = 0.05, posture_cost: float = 1e-2) -> None:
+        self.model = robot_model()
+        self.dt = dt
+        self.configuration = mink.Configuration(self.model)
+        self.frame_task = mink.FrameTask(GRIP_SITE, "site", position_cost=1.0, orientation_cost=0.5,
+                                         lm_damping=1e-3)
+        self.posture_task = mink.PostureTask(self.model, cost=posture_cost)
+        self.base_dofs = np.array([self.model.joint(n).dofadr[0] for n in BASE_JOINTS])
+        self.finger_qpos = np.array([self.model.joint(n).qposadr[0] for n in FINGER_JOINTS])
+        self.limits = [
+            mink.ConfigurationLimit(self.model),
+            mink.VelocityLimit(self.model, JOINT_SPEEDS),
+            mink.CollisionAvoidanceLimit(self.model, [(list(ARM_GEOMS), list(BASE_GEOMS))],
+                                         minimum_distance_from_collisions=0.02, collision_detection_distance=0.1),
+        ]
+        self._damping: dict[float, mink.DampingTask] = {}
+
+    def _damping_task(self, base_cost: float) -> mink.DampingTask:
+        if base_cost not in self._damping:
+            cost = np.full(self.model.nv, 1e-3)
+            cost[self.base_dofs] = base_cost
+            self._damping[base_cost] = mink.DampingTask(self.model, cost)
+        return self._damping[base_cost]
+
+    def grip_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(position m shape (3,), quaternion wxyz shape (4,)) of the grip site at configuration q."""
+        self.configuration.update(np.asarray(q, dtype=float))
+        pose = self.configuration.get_transform_frame_to_world(GRIP_SITE, "site")
+        return pose.translation().copy(), pose.rotation().wxyz.copy()
+
+    def solve(self, q_start: np.ndarray, position: np.ndarray, quat: np.ndarray, base_cost: float = 10.0,
+              max_iters: int = 150, position_tol: float = POSITION_TOL,
+              orientation_tol: float = ORIENTATION_TOL, seeds: bool = True) -> IKResult:
+        """Move the grip site to (position m shape (3,), quat wxyz shape (4,)) from q_start (shape (nq,)).
+
+        base_cost: damping cost of the base joints (large while grasping: the base barely moves).
+        Stops when both tolerances are met; when a start stalls in a local minimum, tries the arm SEEDS (same
+        base) if `seeds`; reports the target unreachable (converged False, with a reason) when all fail.
+        """
+        q_start, position, quat = self._check(q_start, position, quat)
+        starts = [q_start]
+        if seeds:
+            arm = np.array([self.model.joint(n).qposadr[0] for n in (TORSO_JOINT, *ARM_JOINTS)])
+            for seed in SEEDS:
+                q = q_start.copy()
+                q[arm] = seed
+                starts.append(q)
+        best = None
+        for start in starts:
+            result = self._solve_from(start, position, quat, base_cost, max_iters, position_tol, orientation_tol)
+            if result.converged:
+                return result
+            best = result if best is None or result.position_error < best.position_error else best
+        return best
+
+    def _solve_from(self, q_start: np.ndarray, position: np.ndarray, quat: np.ndarray, base_cost: float,
+                    max_iters: int, position_tol: float, orientation_tol: float) -> IKResult:
+        target = mink.SE3.from_rotation_and_translation(mink.SO3(quat), position)
+        self.frame_task.set_target(target)
+        self.configuration.update(q_start)
+        self.posture_task.set_target(q_start)
+        tasks = [self.frame_task, self.posture_task, self._damping_task(base_cost)]
+        errors: list[float] = []
+        fingers = q_start[self.finger_qpos]
+        for iteration in range(1, max_iters + 1):
+            velocity = mink.solve_ik(self.configuration, tasks, self.dt, SOLVER, damping=1e-3, limits=self.limits)
+            self.configuration.integrate_inplace(velocity, self.dt)
+            q = self.configuration.q
+            q[self.finger_qpos] = fingers
+            self.configuration.update(q)
+            pos_err, rot_err = self._pose_error(position, quat)
+            errors.append(pos_err)
+            if pos_err < position_tol and rot_err < orientation_tol:
+                return IKResult(q.copy(), True, pos_err, rot_err, iteration, np.array(errors))
+            if iteration >= 20 and errors[-20] - pos_err < 1e-4:
+                break  # stalled: 20 iterations gained less than 0.1 mm
+        pos_err, rot_err = self._pose_error(position, quat)
+        reason = (f"unreachable: grip site stays {pos_err * 1000:.1f} mm and {np.rad2deg(rot_err):.1f} deg from "
+                  f"the target {np.round(position, 3).tolist()} after {len(errors)} iterations")
+        return IKResult(self.configuration.q.copy(), False, pos_err, rot_err, len(errors), np.array(errors), reason)
+
+    def _pose_error(self, position: np.ndarray, quat: np.ndarray) -> tuple[float, float]:
+        """(position error m, orientation error rad) of the grip site against the target."""
+        pose = self.configuration.get_transform_frame_to_world(GRIP_SITE, "site")
+        pos_err = float(np.linalg.norm(pose.translation() - position))
+        dot = abs(float(np.dot(pose.rotation().wxyz, quat)))
+        return pos_err, 2.0 * float(np.arccos(min(dot, 1.0)))
+
+    def _check(self, q_start, position, quat) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        q_start = np.asarray(q_start, dtype=float)
+        position = np.asarray(position, dtype=float)
+        quat = np.asarray(quat, dtype=float)
+        if q_start.shape != (self.model.nq,):
+            raise IKError(f"q_start has shape {q_start.shape}; the robot has nq = {self.model.nq}")
+        if position.shape != (3,) or not np.all(np.isfinite(position)):
+            raise IKError(f"target position {position.tolist()} is not 3 finite numbers (m)")
+        if quat.shape != (4,) or abs(np.linalg.norm(quat) - 1.0) > 1e-3:
+            raise IKError(f"target quaternion {quat.tolist()} is not a unit wxyz quaternion")
+        return q_start, position, quat

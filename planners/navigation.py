@@ -1,0 +1,119 @@
+"""Navigation of the holonomic base over the floor plan's 2D occupancy grid.
+
+Base poses are chosen in front of a furniture's access side (as the layout validator does, from
+`homer_sim.validate`), centred on the target and free of walls, furniture and open doors. Paths are A* on the
+grid inflated by the robot's radius; the base follows them with the arm tucked, through `Controller`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from homer_sim.errors import HomerError
+from homer_sim.floorplan import find_path, floor_plan, inflate, path_length
+from homer_sim.furniture import local_to_world
+from homer_sim.placement import base_height
+from homer_sim.validate import ROBOT_RADIUS
+from planners.control import Controller
+
+STAND_DISTANCES = np.arange(0.34, 0.81, 0.02)  # m from the furniture's front face to the base centre
+STAND_OFFSETS = np.array([0.0, 0.05, -0.05, 0.1, -0.1, 0.15, -0.15, 0.2, -0.2, 0.3, -0.3])  # m along the face
+WAYPOINT_STRIDE = 4  # keep every 4th grid cell of a path
+CLEARANCE = 0.02  # m beyond ROBOT_RADIUS
+
+
+class NavigationError(HomerError):
+    """No free base pose or no path."""
+
+
+class Navigator:
+    """Base poses and base motion in one World; `controller` drives the robot."""
+
+    def __init__(self, world, controller: Controller) -> None:
+        self.world = world
+        self.controller = controller
+        self.layout = world.layout
+        self.furniture = self.layout.furniture_by_name()
+        self.plan = floor_plan(self.layout)
+        self.blocked = inflate(self.plan, ROBOT_RADIUS + CLEARANCE)
+        model = world.model
+        self.part_geoms = {name: [g for g in range(model.ngeom) if model.geom_bodyid[g] == model.body(name).id]
+                           for name in world.articulations}
+
+    def open_part_rects(self) -> list[tuple[float, float, float, float]]:
+        """World rectangles (x0, y0, x1, y1) in m covered by doors and drawers that are not closed."""
+        data, model = self.world.data, self.world.model
+        rects = []
+        for name, geoms in self.part_geoms.items():
+            if self.world.openness(name) < 0.02:
+                continue
+            corners = []
+            for g in geoms:
+                half = np.abs(data.geom_xmat[g].reshape(3, 3)) @ model.geom_size[g]
+                corners += [data.geom_xpos[g][:2] - half[:2], data.geom_xpos[g][:2] + half[:2]]
+            pts = np.array(corners)
+            rects.append((*pts.min(axis=0), *pts.max(axis=0)))
+        return rects
+
+    def stand_pose(self, node: str, target_xy: tuple[float, float]) -> tuple[float, float, float]:
+        """A free base pose (x m, y m, yaw rad) facing furniture `node` from its front, nearest in front of
+        `target_xy` (m, world)."""
+        if node not in self.furniture:
+            raise NavigationError(f"{node!r} is not furniture; known: {', '.join(sorted(self.furniture))}")
+        f = self.furniture[node]
+        depth = f.size[1]
+        normal = local_to_world(f, np.array([[1.0, 0.0, 0.0]])) - local_to_world(f, np.zeros((1, 3)))
+        normal = normal[0, :2] / np.linalg.norm(normal[0, :2])
+        tangent = np.array([-normal[1], normal[0]])
+        front = np.array(f.pos) + normal * depth / 2
+        along = float(np.dot(np.asarray(target_xy) - front, tangent))
+        obstacles = self.open_part_rects()
+        for offset in STAND_OFFSETS:
+            for distance in STAND_DISTANCES:
+                xy = front + tangent * (along + offset) + normal * distance
+                if self.plan.disk_is_free(float(xy[0]), float(xy[1]), ROBOT_RADIUS, obstacles):
+                    yaw = math.atan2(-normal[1], -normal[0])
+                    return float(xy[0]), float(xy[1]), yaw
+        raise NavigationError(f"no free base pose in front of {node} near {np.round(target_xy, 2).tolist()}")
+
+    def path_to(self, goal: tuple[float, float, float]) -> list[tuple[float, float]]:
+        """Waypoints (x, y) in m from the base's current position to `goal`, avoiding open doors."""
+        start = tuple(self.controller.q()[:2])
+        extra = np.zeros_like(self.blocked)
+        for rect in self.open_part_rects():
+            grown = (rect[0] - ROBOT_RADIUS, rect[1] - ROBOT_RADIUS, rect[2] + ROBOT_RADIUS, rect[3] + ROBOT_RADIUS)
+            i0, j0 = self.plan.cell(grown[0], grown[1])
+            i1, j1 = self.plan.cell(grown[2], grown[3])
+            extra[max(i0, 0) : i1 + 1, max(j0, 0) : j1 + 1] = True
+        path = find_path(self.blocked, self.plan, start, goal[:2], extra)
+        if path is None:
+            raise NavigationError(f"no path from {np.round(start, 2).tolist()} to {np.round(goal[:2], 2).tolist()}")
+        return path
+
+    def drive_to(self, goal: tuple[float, float, float], tuck: np.ndarray) -> float:
+        """Drive the base to `goal` (x m, y m, yaw rad) with the torso and arm at `tuck` (shape (13,));
+        returns the path length in m."""
+        path = self.path_to(goal)
+        keep = path[1:-1][::WAYPOINT_STRIDE] + [path[-1]]
+        q0 = self.controller.target.copy()
+        yaw0 = q0[2]
+        dyaw = (goal[2] - yaw0 + math.pi) % (2 * math.pi) - math.pi
+        waypoints = []
+        for k, (x, y) in enumerate(keep, start=1):
+            q = tuck.copy()
+            q[:3] = (x, y, yaw0 + dyaw * min(1.0, 2.0 * k / len(keep)))  # turn during the first half
+            waypoints.append(q)
+        if np.max(np.abs(self.controller.target[3:11] - tuck[3:11])) > 1e-3:  # tuck first, on the spot
+            q = tuck.copy()
+            q[:3] = q0[:3]
+            self.controller.move_through([q])
+        self.controller.move_through(waypoints)
+        self.controller.settle(0.005, max_seconds=2.0)
+        return path_length(path)
+
+
+def base_z(layout, node: str) -> float:
+    """Height in m of the base of furniture `node` (0 for furniture on the floor)."""
+    return base_height(layout, layout.furniture_by_name()[node])

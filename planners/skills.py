@@ -1,0 +1,228 @@
+"""Robot skills in physics: pick and place, checked on the observed scene graph.
+
+Objects move only because the fingers hold them (no weld, no teleport). Each skill returns a `SkillResult`
+with success or a clear failure reason; a failed grasp is retried from the next grasp candidate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from homer_sim.catalog import CATALOG
+from homer_sim.graph import INSIDE, ON
+from homer_sim.observe import SceneGraphObserver
+from homer_sim.spots import Spots
+from planners.control import Controller
+from planners.grasps import Grasp, matrix_to_quat, top_grasps, ungraspable_reason
+from planners.ik import IKSolver
+from planners.navigation import NavigationError, Navigator
+
+APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to
+LIFT = 0.15  # m
+HOLD_SECONDS = 0.5
+MIN_HELD_OPENING = 0.001  # m per finger: closed further means the fingers missed
+GRASP_BASE_COST = 100.0  # IK damping on the base while grasping
+RAISED_TORSO = 0.3  # m
+CARRY_REACH = 0.35  # m from the base centre
+CARRY_HEIGHT = 1.05  # m
+RAISED_SHOULDER = -1.0  # rad: upper arm raised above the tuck
+
+
+@dataclass(frozen=True)
+class SkillResult:
+    """success, and when not, why (names the object, the place and the measured values)."""
+
+    success: bool
+    reason: str = ""
+
+
+class Robot:
+    """The robot in a World: IK, control, navigation, scene-graph checks, and the skills built on them."""
+
+    def __init__(self, world, rng: np.random.Generator | None = None) -> None:
+        self.world = world
+        self.ik = IKSolver()
+        self.controller = Controller(world)
+        self.navigator = Navigator(world, self.controller)
+        self.spots = Spots(world)
+        self.observer = SceneGraphObserver(world)
+        self.rng = rng if rng is not None else np.random.default_rng(0)
+        self.tuck = self.ik.model.key("home").qpos.copy()
+        self.held: str | None = None
+        self.folded = True  # the arm is in (or moving from) the tuck posture
+        self.shoulder_lift = self.ik.model.joint("shoulder_lift").qposadr[0]
+
+    # --- motion helpers ---------------------------------------------------------------------------------
+    def _ik(self, position: np.ndarray, rotation_quat: np.ndarray, seeds: bool = True):
+        return self.ik.solve(self.controller.target, position, rotation_quat, base_cost=GRASP_BASE_COST,
+                             seeds=seeds)
+
+    def _line(self, start: np.ndarray, end: np.ndarray, quat: np.ndarray, steps: int = 4) -> list[np.ndarray] | None:
+        """IK configurations along the straight grip-site line start -> end (m), or None if any is unreachable."""
+        q = self.controller.target.copy()
+        path = []
+        for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
+            result = self.ik.solve(q, start + s * (end - start), quat, base_cost=GRASP_BASE_COST, seeds=False)
+            if not result.converged:
+                return None
+            q = result.q
+            path.append(q)
+        return path
+
+    def raised(self, torso: float) -> np.ndarray:
+        """The tuck posture with the upper arm raised and the torso at `torso` m, at the current base pose: the
+        waypoint between tuck and any reach, so the folded arm never sweeps through a counter."""
+        q = self.tuck.copy()
+        q[:3] = self.controller.target[:3]
+        q[3] = max(torso, RAISED_TORSO)
+        q[self.shoulder_lift] = RAISED_SHOULDER
+        return q
+
+    def reach(self, q_goal: np.ndarray, grip: float | None = None) -> None:
+        """Move to configuration q_goal (shape (13,)); from the tuck posture through `raised`."""
+        if self.folded:
+            self.controller.move_through([self.raised(q_goal[3]), q_goal], grip=grip)
+        else:
+            self.controller.move_through([q_goal], grip=grip)
+        self.folded = False
+
+    def retract(self) -> None:
+        """Tuck the arm in place through `raised` (the base stays)."""
+        if not self.folded:
+            raised = self.raised(self.controller.target[3])
+            tuck = self.tuck.copy()
+            tuck[:3] = raised[:3]
+            self.controller.move_through([raised, tuck])
+        self.folded = True
+
+    def go_to(self, node: str, target_xy: np.ndarray) -> None:
+        """Drive to a free base pose in front of furniture `node`, facing `target_xy`: with the arm tucked, or
+        while holding an object with the grip site CARRY_REACH m in front of the base at CARRY_HEIGHT m."""
+        goal = self.navigator.stand_pose(node, tuple(target_xy))
+        posture = self.tuck.copy() if self.folded else self._carry_posture()
+        self.navigator.drive_to(goal, posture)
+
+    def _carry_posture(self) -> np.ndarray:
+        """A configuration holding the grip site close in front of the base, orientation kept."""
+        x, y, yaw = self.controller.target[:3]
+        point = np.array([x + CARRY_REACH * np.cos(yaw), y + CARRY_REACH * np.sin(yaw), CARRY_HEIGHT])
+        result = self._ik(point, self._held_quat())
+        return result.q if result.converged else self.controller.target.copy()
+
+    # --- pick --------------------------------------------------------------------------------------------
+    def pick(self, name: str, node: str | None = None) -> SkillResult:
+        """Grasp object `name` and lift it LIFT m; `node` (the furniture it is on or in) is where to stand."""
+        cls = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls]
+        reason = ungraspable_reason(cls)
+        if reason is not None:
+            return SkillResult(False, f"{name}: not graspable ({reason})")
+        graph = self.observer.update()
+        node = node or graph.parent_of(name)
+        position, _ = self.world.object_pose(name)
+        try:
+            self.go_to(node, position[:2])
+        except NavigationError as error:
+            return SkillResult(False, f"{name}: {error}")
+        failures = []
+        position, quat = self.world.object_pose(name)
+        for grasp in top_grasps(cls, position, quat, self.controller.q()[:2]):
+            outcome = self._try_grasp(name, grasp)
+            if outcome.success:
+                self.held = name
+                return outcome
+            failures.append(f"{grasp.kind}: {outcome.reason}")
+        return SkillResult(False, f"{name}: every grasp failed ({'; '.join(failures)})")
+
+    def _try_grasp(self, name: str, grasp: Grasp) -> SkillResult:
+        quat = grasp.quat()
+        above = grasp.position + np.array([0.0, 0.0, APPROACH])
+        pre = self._ik(above, quat)
+        if not pre.converged:
+            return SkillResult(False, f"approach pose {pre.reason}")
+        self.reach(pre.q, grip=grasp.pre_opening)
+        self.controller.settle(0.003)
+        down = self._line(above, grasp.position, quat)
+        if down is None:
+            return SkillResult(False, "the descent leaves the arm's reach")
+        start, _ = self.world.object_pose(name)
+        self.controller.move_through(down)
+        self.controller.settle(0.002)
+        opening = self.controller.set_grip(0.0)
+        if opening < MIN_HELD_OPENING:
+            self._back_off(above, quat)
+            return SkillResult(False, f"fingers closed on nothing (opening {opening * 1000:.1f} mm)")
+        up = self._line(grasp.position, grasp.position + np.array([0.0, 0.0, LIFT]), quat)
+        if up is None:
+            self._back_off(above, quat)
+            return SkillResult(False, "the lift leaves the arm's reach")
+        self.controller.move_through(up)
+        self.world.step(int(HOLD_SECONDS / self.world.model.opt.timestep))
+        lifted = self.world.object_pose(name)[0][2] - start[2]
+        if lifted < 0.5 * LIFT:
+            self._back_off(above, quat)
+            return SkillResult(False, f"the object rose only {lifted * 100:.1f} cm of {LIFT * 100:.0f} cm")
+        return SkillResult(True)
+
+    def _back_off(self, above: np.ndarray, quat: np.ndarray) -> None:
+        """Open the fingers and return above the grasp (then tuck)."""
+        self.controller.set_grip(0.05, seconds=0.3)
+        result = self._ik(above, quat, seeds=False)
+        if result.converged:
+            self.controller.move_through([result.q])
+        self.retract()
+
+    # --- place -------------------------------------------------------------------------------------------
+    def place(self, node: str, relation: int | None = None) -> SkillResult:
+        """Put the held object at a free spot ON or INSIDE furniture `node`, release it and retreat."""
+        name = self.held
+        if name is None:
+            return SkillResult(False, "place: the robot holds nothing")
+        exclude = {self.world.object_index(name)}
+        spot = None
+        for k, _ in self.spots.places_of(node, relation):
+            spot = self.spots.free_spot(name, node, k, self.rng, exclude)
+            if spot is not None:
+                break
+        if spot is None:
+            return SkillResult(False, f"place: no free spot for {name} on {node}")
+        target = np.array(spot.pos)
+        grip_pos = self.world.data.site("robot/grip").xpos.copy()
+        obj_pos, _ = self.world.object_pose(name)
+        offset = grip_pos - obj_pos  # the object hangs where it is held: keep that offset
+        try:
+            self.go_to(node, target[:2])
+        except NavigationError as error:
+            return SkillResult(False, f"place: {error}")
+        quat = self._held_quat()
+        release = target + offset + np.array([0.0, 0.0, 0.01])
+        above = release + np.array([0.0, 0.0, APPROACH])
+        pre = self._ik(above, quat)
+        if not pre.converged:
+            return SkillResult(False, f"place: {name} above {node} is {pre.reason}")
+        self.reach(pre.q)
+        down = self._line(above, release, quat)
+        if down is None:
+            return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
+        self.controller.move_through(down)
+        self.controller.settle(0.003)
+        self.controller.set_grip(0.05, seconds=0.4)
+        self.held = None
+        up = self._line(release, above, quat)
+        if up is not None:
+            self.controller.move_through(up)
+        self.retract()
+        self.world.settle(max_seconds=2.0)
+        graph = self.observer.update()
+        parent, relation_seen = graph.parent_of(name), graph.relation_of(name)
+        if parent != node:
+            return SkillResult(False, f"place: {name} ended {relation_seen} {parent}, not on {node}")
+        return SkillResult(True)
+
+    def _held_quat(self) -> np.ndarray:
+        """The grip site's current orientation (wxyz), kept while carrying."""
+        return matrix_to_quat(self.world.data.site("robot/grip").xmat.reshape(3, 3))
+
+
+__all__ = ["Robot", "SkillResult", "ON", "INSIDE"]
