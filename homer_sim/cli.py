@@ -239,6 +239,10 @@ def build_parser() -> argparse.ArgumentParser:
     compat.add_argument("--scripts", type=Path, required=True, help="folder laid out <activity>/<name>.txt")
     compat.add_argument("--json", action="store_true", help="print one JSON object")
     compat.set_defaults(func=cmd_compat_check)
+
+    from model.cli import register as register_model  # train, evaluate (torch is imported only when they run)
+
+    register_model(commands)
     return parser
 
 

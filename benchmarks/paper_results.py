@@ -1,0 +1,233 @@
+"""The paper's results on a dataset, as files. Resumable: every finished run is recorded in OUT/runs.json and
+skipped next time; fitted predictors are cached under OUT/checkpoints.
+
+Experiments (--experiments, default all):
+  main      the default methods on all training days of each household; outcome counts for windows 10..120 min
+            (every method tuned on its validation days at 30 min)
+  ablation  gnn_no_attention and gnn_linear_time, same protocol
+  days      gnn, fremen, fremen_prior, static_semantic and markov on the first 5, 10, 20, 30, 40 training days
+            (50 comes from `main`)
+  pretrain  gnn pre-trained on the other four households' training days, fine-tuned on 5..50 days of each
+Files in OUT: main_table.md / main_table.json (30 and 40 min: mean and spread over households), windows.png,
+days.png, pretrain.png, ablation.md. One JSON object (the main table at 30 min and the file list) on stdout.
+
+    .venv/bin/python benchmarks/paper_results.py --data DIR --out DIR [--experiments main,ablation]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import sys
+import time
+from dataclasses import asdict
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+import numpy as np  # noqa: E402
+
+from homer_sim.dataset import Dataset, Day  # noqa: E402
+from model.cli import format_table  # noqa: E402
+from model.evaluate import (  # noqa: E402
+    CURVE_WINDOWS_MIN,
+    HEADLINE_WINDOW_MIN,
+    FitSpec,
+    fit_tuned,
+    household_result,
+    household_split,
+    score_windows,
+    split_days,
+    summarise,
+)
+from model.metrics import Counts, day_queries  # noqa: E402
+from model.names import DEFAULT_METHODS  # noqa: E402
+from model.plots import days_curve, window_bars  # noqa: E402
+
+log = logging.getLogger("paper_results")
+EXPERIMENTS = ("main", "ablation", "days", "pretrain")
+ABLATIONS = ("gnn", "gnn_no_attention", "gnn_linear_time")
+DAYS_METHODS = ("gnn", "fremen", "fremen_prior", "static_semantic", "markov")
+DAY_COUNTS = (5, 10, 20, 30, 40)
+TABLE_WINDOWS = (HEADLINE_WINDOW_MIN, 40)
+
+
+class Runs:
+    """runs.json: run key -> record; written atomically after every run."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.records: dict[str, dict] = json.loads(path.read_text()) if path.is_file() else {}
+
+    def done(self, key: str) -> bool:
+        return key in self.records
+
+    def add(self, key: str, record: dict) -> None:
+        self.records[key] = record
+        tmp = self.path.with_suffix(".json.tmp")
+        tmp.write_text(json.dumps(self.records, indent=1, sort_keys=True))
+        os.replace(tmp, self.path)
+
+
+def run_one(dataset: Dataset, house: str, method: str, days: int | None, folder: Path,
+            init: Path | None = None) -> dict:
+    """Fit (or load), tune at 30 min, and count outcomes on the test days for every curve window."""
+    started = time.perf_counter()
+    fit, val, test, pool = household_split(dataset, house, days)
+    spec = FitSpec(method, tuple(fit), tuple(val), init=init)
+    predictor, info = fit_tuned(spec, dataset.meta, HEADLINE_WINDOW_MIN, spec.path(folder, house))
+    queries = day_queries(test, max(CURVE_WINDOWS_MIN) // dataset.meta.grid_min)
+    scored = score_windows(predictor, queries, CURVE_WINDOWS_MIN, dataset.meta.grid_min, pool)
+    return {"windows": {str(w): {"all": asdict(c), "used_pool": asdict(p)} for w, (c, p) in scored.items()},
+            "queries": len(queries), "params": predictor.params, "info": info,
+            "wall_s": round(time.perf_counter() - started, 1)}
+
+
+def pretrained(dataset: Dataset, house: str, folder: Path) -> Path:
+    """Checkpoint of the graph network trained on every other household's training days (fit and validation)."""
+    fit: list[Day] = []
+    val: list[Day] = []
+    for other in dataset.meta.households:
+        if other != house:
+            f, v = split_days(dataset.load(other, "train"))
+            fit, val = fit + f, val + v
+    spec = FitSpec("gnn", tuple(fit), tuple(val))
+    path = spec.path(folder / "pretrain", f"without_{house}")
+    fit_tuned(spec, dataset.meta, HEADLINE_WINDOW_MIN, path)
+    return path
+
+
+def plan(dataset: Dataset, experiments: list[str], households: list[str], methods: list[str]) -> list[tuple]:
+    """(key, household, method, days, pretrain?) of every run, in order."""
+    runs = []
+    for house in households:
+        n_train = len(dataset.day_indices(house, "train"))
+        if "main" in experiments:
+            runs += [(f"main/{house}/{m}/{n_train}", house, m, None, False) for m in methods]
+        if "ablation" in experiments:
+            runs += [(f"main/{house}/{m}/{n_train}", house, m, None, False) for m in ABLATIONS]
+        if "days" in experiments:
+            runs += [(f"days/{house}/{m}/{d}", house, m, d, False) for d in DAY_COUNTS if d < n_train
+                     for m in DAYS_METHODS]
+        if "pretrain" in experiments:
+            runs += [(f"pretrain/{house}/gnn/{d}", house, "gnn", d, True) for d in (*DAY_COUNTS, n_train)
+                     if d <= n_train]
+    return list(dict.fromkeys(runs))
+
+
+def execute(dataset: Dataset, runs: Runs, todo: list[tuple], folder: Path) -> None:
+    for k, (key, house, method, days, pretrain) in enumerate(todo):
+        if runs.done(key):
+            continue
+        log.info("run %d/%d: %s", k + 1, len(todo), key)
+        init = pretrained(dataset, house, folder) if pretrain else None
+        runs.add(key, run_one(dataset, house, method, days, folder, init))
+
+
+def _counts(record: dict, window: int, pool: str = "all") -> Counts:
+    return Counts(**record["windows"][str(window)][pool])
+
+
+def table(records: dict, prefix: str, window: int) -> dict:
+    """{"window_min", "households", "methods": summarised percentages} from runs whose key starts with prefix."""
+    per_method: dict[str, dict[str, dict]] = {}
+    for key, record in records.items():
+        if key.startswith(prefix):
+            _, house, method, _ = key.split("/")
+            result = household_result(_counts(record, window), _counts(record, window, "used_pool"), record["params"])
+            per_method.setdefault(method, {})[house] = result
+    houses = sorted({h for per in per_method.values() for h in per})
+    return {"window_min": window, "households": houses, "methods": {m: summarise(v) for m, v in per_method.items()}}
+
+
+def per_query(records: dict, prefix: str) -> dict[str, dict[int, dict]]:
+    """Objects per query in each outcome, averaged over households, per method and window."""
+    out: dict[str, dict[int, dict]] = {}
+    for key, record in records.items():
+        if key.startswith(prefix):
+            method = key.split("/")[2]
+            for window in CURVE_WINDOWS_MIN:
+                c, q = _counts(record, window), record["queries"]
+                values = {"used": {"correct": c.used_correct / q, "wrong": c.used_wrong / q,
+                                   "missed": c.used_missed / q},
+                          "unused": {"correct": c.unused_correct / q, "wrong": c.unused_wrong / q}}
+                out.setdefault(method, {}).setdefault(window, []).append(values)
+    return {m: {w: _mean_nested(v) for w, v in per.items()} for m, per in out.items()}
+
+
+def _mean_nested(rows: list[dict]) -> dict:
+    return {g: {k: float(np.mean([r[g][k] for r in rows])) for k in rows[0][g]} for g in rows[0]}
+
+
+def days_summary(records: dict, experiment: str, methods: tuple[str, ...], label: str = "") -> dict:
+    """summary[method label][days] of the 30-minute percentages, the full-data point taken from `main`."""
+    out: dict[str, dict[int, dict]] = {}
+    for key, record in records.items():
+        kind, house, method, days = key.split("/")
+        if method in methods and kind in (experiment, "main"):
+            name = f"{method}{label}" if kind == experiment else method
+            if kind == "main" and label:
+                continue
+            out.setdefault(name, {}).setdefault(int(days), {})[house] = household_result(
+                _counts(record, HEADLINE_WINDOW_MIN), _counts(record, HEADLINE_WINDOW_MIN, "used_pool"), {})
+    return {m: {d: summarise(h) for d, h in sorted(per.items())} for m, per in out.items()}
+
+
+def write_outputs(records: dict, out: Path) -> dict:
+    """Every file that the finished runs allow; returns the 30-minute main table and the files written."""
+    files, main = [], {}
+    for window in TABLE_WINDOWS:
+        result = table(records, "main/", window)
+        if result["methods"]:
+            main.setdefault("tables", {})[str(window)] = result
+    if main:
+        (out / "main_table.json").write_text(json.dumps(main["tables"], indent=1))
+        (out / "main_table.md").write_text("\n\n".join(format_table(t) for t in main["tables"].values()) + "\n")
+        files += ["main_table.json", "main_table.md"]
+        curves = per_query(records, "main/")
+        files.append(window_bars({m: curves[m] for m in curves if m not in ABLATIONS[1:]}, out / "windows.png").name)
+        ablation = {m: v for m, v in main["tables"][str(HEADLINE_WINDOW_MIN)]["methods"].items() if m in ABLATIONS}
+        if len(ablation) > 1:
+            rows = [f"| {m} | {v['used']['correct']:.2f} | {v['used']['wrong']:.2f} | {v['unused']['wrong']:.2f} |"
+                    for m, v in ablation.items()]
+            (out / "ablation.md").write_text("| method | % used correct | % used wrong | % unused wrong |\n"
+                                             "|---|---|---|---|\n" + "\n".join(rows) + "\n")
+            files.append("ablation.md")
+    if any(k.startswith("days/") for k in records):
+        files.append(days_curve(days_summary(records, "days", DAYS_METHODS), out / "days.png",
+                                "30-minute window, by training days").name)
+    if any(k.startswith("pretrain/") for k in records):
+        curves = {**days_summary(records, "days", ("gnn",)), **days_summary(records, "pretrain", ("gnn",),
+                                                                              " (pre-trained)")}
+        files.append(days_curve(curves, out / "pretrain.png", "graph network: from scratch vs pre-trained").name)
+    headline = main.get("tables", {}).get(str(HEADLINE_WINDOW_MIN), {})
+    return {"main_30min": {m: {"used": v["used"], "unused": v["unused"], "spread": v["spread"]}
+                           for m, v in headline.get("methods", {}).items()}, "files": files}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--data", type=Path, required=True, help="dataset folder")
+    parser.add_argument("--out", type=Path, required=True, help="output folder (runs.json, checkpoints, files)")
+    parser.add_argument("--experiments", default=",".join(EXPERIMENTS), help=f"from {', '.join(EXPERIMENTS)}")
+    parser.add_argument("--households", default=None, help="comma-separated subset (default all)")
+    parser.add_argument("--methods", default=",".join(DEFAULT_METHODS), help="methods of the main experiment")
+    args = parser.parse_args()
+    logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(asctime)s %(name)s: %(message)s")
+    experiments = [e for e in args.experiments.split(",") if e]
+    unknown = sorted(set(experiments) - set(EXPERIMENTS))
+    if unknown:
+        parser.error(f"unknown experiments {unknown}; known: {', '.join(EXPERIMENTS)}")
+    dataset = Dataset(args.data)
+    households = args.households.split(",") if args.households else list(dataset.meta.households)
+    args.out.mkdir(parents=True, exist_ok=True)
+    runs = Runs(args.out / "runs.json")
+    execute(dataset, runs, plan(dataset, experiments, households, args.methods.split(",")), args.out / "checkpoints")
+    json.dump(write_outputs(runs.records, args.out), sys.stdout, indent=1)
+    sys.stdout.write("\n")
+
+
+if __name__ == "__main__":
+    main()

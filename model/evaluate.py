@@ -1,0 +1,208 @@
+"""Fit, tune on validation days, and score methods on test days; cache fitted predictors as checkpoints.
+
+Protocol, per household: the last VAL_FRACTION of the training days (at least one) are validation days, the
+rest are fit days. Each method is fitted on the fit days (the graph network early-stops on the validation
+days), then every tunable parameter, the decision threshold included, is chosen on the validation days by grid
+search: the highest used correct % - used wrong % - unused wrong % (model.metrics.Counts.objective) at the
+tuning window among the settings that leave at least 99% of the unused objects in place (the paper's operating
+point; if no setting does, the highest objective). The same rule for every method. Test days are used only for
+the reported numbers.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import logging
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from homer_sim.dataset import Dataset, DatasetMeta, Day
+from model.methods import check_method, load_predictor, make_predictor, save_predictor
+from model.metrics import Counts, Queries, day_queries, gate, score, window_steps
+from model.predictor import ModelError, Predictor, Rollout
+
+log = logging.getLogger(__name__)
+VAL_FRACTION = 0.1
+HEADLINE_WINDOW_MIN = 30
+CURVE_WINDOWS_MIN = tuple(range(10, 130, 10))
+MAX_UNUSED_WRONG_PCT = 1.0  # tuning keeps at least 99% of unused objects in place when any setting can
+TUNING_VERSION = 2  # bump when the tuning rule or a grid changes: cached tunings are then redone
+QUERY_CHUNK = 128  # queries per rollout call, bounds memory of the dense (B, N, N) probabilities
+
+
+def split_days(days: Sequence[Day], val_fraction: float = VAL_FRACTION) -> tuple[list[Day], list[Day]]:
+    """(fit days, validation days): the last `val_fraction` of the days, at least one, are for validation."""
+    if len(days) < 2:
+        raise ModelError(f"{len(days)} training day(s); need at least 2 (fit and validation)")
+    n_val = min(len(days) - 1, max(1, int(round(len(days) * val_fraction))))
+    return list(days[:-n_val]), list(days[-n_val:])
+
+
+def rollout_queries(predictor: Predictor, queries: Queries, steps: int) -> Rollout:
+    """predictor.rollout over all queries, in chunks of QUERY_CHUNK."""
+    parts = [predictor.rollout(queries.observed[s:s + QUERY_CHUNK], queries.minute[s:s + QUERY_CHUNK], steps)
+             for s in range(0, len(queries), QUERY_CHUNK)]
+    return Rollout(*(np.concatenate([getattr(p, f.name) for p in parts], axis=1) for f in fields(Rollout)))
+
+
+def tune(predictor: Predictor, queries: Queries, steps: int) -> tuple[dict[str, float], float]:
+    """Grid search of the predictor's tunables on validation queries; sets and returns the best (and its objective).
+
+    Best: the highest objective among settings that move at most MAX_UNUSED_WRONG_PCT of the unused objects, or
+    the highest objective overall if none does. The threshold only changes the decision rule applied to a rollout,
+    so one rollout per combination of the other tunables scores every threshold.
+    """
+    names = [k for k in predictor.grid if k != "threshold"]
+    thresholds = predictor.grid.get("threshold", (predictor.params["threshold"],))
+    scored: list[tuple[bool, float, int, dict[str, float]]] = []
+    for values in itertools.product(*(predictor.grid[k] for k in names)):
+        predictor.set_params(**dict(zip(names, values, strict=True)))
+        rollout = rollout_queries(predictor, queries, steps)
+        for threshold in thresholds:
+            counts = score(queries, gate(rollout, queries.observed, threshold), steps, predictor.movable)
+            within = counts.unused_wrong <= MAX_UNUSED_WRONG_PCT / 100.0 * counts.unused
+            params = {**dict(zip(names, values, strict=True)), "threshold": float(threshold)}
+            scored.append((within, counts.objective(), -len(scored), params))
+    within, objective, _, best = max(scored, key=lambda row: row[:3])  # earliest in grid order wins ties
+    predictor.set_params(**best)
+    return dict(predictor.params), objective
+
+def days_fingerprint(days: Sequence[Day]) -> str:
+    """A short digest of the days' parent arrays (the cache key of a fitted predictor)."""
+    digest = hashlib.sha1()
+    for day in days:
+        digest.update(f"{day.household}/{day.split}/{day.index}".encode())
+        digest.update(np.ascontiguousarray(day.parent).tobytes())
+    return digest.hexdigest()[:12]
+
+
+@dataclass(frozen=True)
+class FitSpec:
+    """What a fitted predictor depends on: method, network overrides, the days, and pre-trained weights if any."""
+
+    method: str
+    fit_days: tuple[Day, ...]
+    val_days: tuple[Day, ...]
+    config: tuple[tuple[str, object], ...] = ()
+    init: Path | None = None
+
+    def key(self) -> str:
+        raw = json.dumps([self.method, list(self.config), days_fingerprint(self.fit_days),
+                          days_fingerprint(self.val_days), str(self.init) if self.init else None], default=str)
+        return hashlib.sha1(raw.encode()).hexdigest()[:12]
+
+    def path(self, folder: Path, household: str) -> Path:
+        return folder / household / f"{self.method}_{len(self.fit_days)}+{len(self.val_days)}d_{self.key()}.pt"
+
+
+def fit_tuned(spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | None = None,
+              progress: bool = True) -> tuple[Predictor, dict]:
+    """Load the cached predictor at `path` or fit one; tune it at `window_min` unless the cache already was.
+
+    Returns the predictor and its provenance (days, training report, tuning window and validation objective).
+    """
+    steps = window_steps(window_min, meta.grid_min)
+    if path is not None and path.is_file():
+        predictor, info = load_predictor(path, meta, progress=progress)
+        if info.get("tuned_window_min") == window_min and info.get("tuning_version") == TUNING_VERSION:
+            return predictor, info
+    else:
+        predictor = make_predictor(spec.method, meta, progress=progress, **dict(spec.config))
+        if spec.init is not None:
+            predictor.load_state(load_predictor(spec.init, meta, progress=progress)[0].state())
+        predictor.fit(spec.fit_days, spec.val_days)
+        info = {"fit_days": len(spec.fit_days), "val_days": len(spec.val_days), "init": str(spec.init or "")}
+        report = getattr(predictor, "report", None)
+        if report is not None:
+            info.update(epochs=report.epochs, best_epoch=report.best_epoch, train_s=round(report.wall_s, 2))
+    params, val_score = tune(predictor, day_queries(spec.val_days, steps), steps)
+    log.info("%s tuned at %d min: %s (validation objective %.2f)", spec.method, window_min, params, val_score)
+    info = {**info, "tuned_window_min": window_min, "tuning_version": TUNING_VERSION,
+            "val_objective": round(val_score, 4)}
+    if path is not None:
+        save_predictor(path, predictor, info)
+    return predictor, info
+
+
+def used_objects(days: Sequence[Day]) -> np.ndarray:
+    """(N,) bool: nodes whose parent changes at least once between consecutive steps of `days`."""
+    return np.any([np.any(d.parent[1:] != d.parent[:-1], axis=0) for d in days], axis=0)
+
+
+def score_windows(predictor: Predictor, queries: Queries, windows_min: Sequence[int], grid_min: int,
+                  pool: np.ndarray) -> dict[int, tuple[Counts, Counts]]:
+    """Per window: (counts with every movable node as unused pool, counts with the household's used objects)."""
+    steps = [window_steps(w, grid_min) for w in windows_min]
+    rollout = rollout_queries(predictor, queries, max(steps))
+    predicted = gate(rollout, queries.observed, predictor.params["threshold"])
+    return {w: (score(queries, predicted, s, predictor.movable), score(queries, predicted, s, predictor.movable, pool))
+            for w, s in zip(windows_min, steps, strict=True)}
+
+
+def evaluate(data: str | Path, methods: Sequence[str], window_min: int = HEADLINE_WINDOW_MIN,
+             checkpoints: str | Path | None = None, households: Sequence[str] | None = None,
+             train_days: int | None = None, progress: bool = True) -> dict:
+    """The `homer evaluate` result: per method, percentages averaged over households (see DESIGN.md)."""
+    dataset = Dataset(data)
+    methods = [check_method(m) for m in methods]
+    folder = Path(checkpoints) if checkpoints is not None else dataset.root / "checkpoints"
+    names = list(households or dataset.meta.households)
+    per_house: dict[str, dict[str, dict]] = {m: {} for m in methods}
+    bar = tqdm(total=len(names) * len(methods), desc="evaluate", unit="fit", disable=not progress)
+    for house in names:
+        fit, val, test, pool = household_split(dataset, house, train_days)
+        queries = day_queries(test, window_steps(window_min, dataset.meta.grid_min))
+        for method in methods:
+            bar.set_postfix(household=house, method=method)
+            spec = FitSpec(method, tuple(fit), tuple(val))
+            predictor, _ = fit_tuned(spec, dataset.meta, window_min, spec.path(folder, house), progress)
+            counts, pooled = score_windows(predictor, queries, [window_min], dataset.meta.grid_min, pool)[window_min]
+            per_house[method][house] = household_result(counts, pooled, predictor.params)
+            bar.update()
+    bar.close()
+    return {"window_min": window_min, "households": names, "train_days": train_days,
+            "methods": {m: summarise(per_house[m]) for m in methods}}
+
+
+def household_split(dataset: Dataset, house: str, train_days: int | None
+                    ) -> tuple[list[Day], list[Day], list[Day], np.ndarray]:
+    """Fit, validation and test days of a household and its used-object pool (from its training days)."""
+    train = dataset.load(house, "train")
+    if train_days is not None:
+        if not 2 <= train_days <= len(train):
+            raise ModelError(f"--train-days {train_days}; household {house} has {len(train)} training days (use 2..)")
+        train = train[:train_days]
+    test = dataset.load(house, "test")
+    if not test:
+        raise ModelError(f"household {house} has no test days in {dataset.root}")
+    fit, val = split_days(train)
+    return fit, val, test, used_objects(train)
+
+
+def household_result(counts: Counts, pooled: Counts, params: dict[str, float]) -> dict:
+    result = counts.percentages()
+    result["unused_used_pool"] = pooled.percentages()["unused"]
+    result["counts"] = {"used": counts.used, "unused": counts.unused, "unused_used_pool": pooled.unused}
+    result["params"] = dict(params)
+    return result
+
+
+def summarise(per_house: dict[str, dict]) -> dict:
+    """Mean and spread (population standard deviation) over households of each percentage."""
+    out: dict = {"per_household": per_house}
+    for group in ("used", "unused", "unused_used_pool"):
+        keys = next(iter(per_house.values()))[group].keys()
+        values = {k: np.array([h[group][k] for h in per_house.values()], dtype=float) for k in keys}
+        out[group] = {k: _finite(np.nanmean(v)) for k, v in values.items()}
+        out.setdefault("spread", {})[group] = {k: _finite(np.nanstd(v)) for k, v in values.items()}
+    return out
+
+
+def _finite(value: float) -> float | None:
+    return round(float(value), 3) if np.isfinite(value) else None

@@ -1,0 +1,150 @@
+"""The paper's relocation metrics for a proactivity window (DESIGN.md, "Metrics").
+
+A query is a grid step t of a test day: the observed graph at t and what truly happens at t + 1 .. t + K.
+For a window of w steps, an object is *used* when its true parent changes within (t, t + w]. Only the first
+change counts, for truth and prediction alike, compared with the parent observed at t. Used objects are
+*correct* (first predicted destination = first true destination, both inside the window), *wrong* (a predicted
+move to another destination) or *missed* (no predicted move). Unused objects are *correct* (no predicted move)
+or *wrong* (a predicted move). Near the end of a day the window is cut at the day's last step, for truth and
+prediction alike; the last step of a day is no query. Percentages are per household.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from homer_sim.dataset import Day
+from model.predictor import ModelError, Rollout
+
+
+@dataclass(frozen=True)
+class Queries:
+    """Every grid step of some days (but each day's last) as a query.
+
+    observed: Shape (Q, N) int, parents at the query step t. minute: Shape (Q,) routine minute of t.
+    future: Shape (Q, K, N) int, true parents at t + 1 .. t + K (the day's last step repeated past its end).
+    valid: Shape (Q,) int, how many of the K future steps exist in the day (K, or fewer near its end).
+    """
+
+    observed: np.ndarray
+    minute: np.ndarray
+    future: np.ndarray
+    valid: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.minute)
+
+
+def day_queries(days: Sequence[Day], steps: int) -> Queries:
+    """Queries at every step but the last of each day, with `steps` future steps each."""
+    observed, minute, future, valid = [], [], [], []
+    for day in days:
+        t = np.arange(day.steps - 1)
+        ahead = np.minimum(t[:, None] + 1 + np.arange(steps)[None], day.steps - 1)  # (T - 1, K)
+        observed.append(day.parent[:-1])
+        minute.append(day.minutes[:-1])
+        future.append(day.parent[ahead])
+        valid.append(np.minimum(steps, day.steps - 1 - t))
+    if not observed:
+        raise ModelError("no days to query; give at least one day with two or more grid steps")
+    return Queries(np.concatenate(observed).astype(np.int64), np.concatenate(minute).astype(np.float32),
+                   np.concatenate(future).astype(np.int64), np.concatenate(valid).astype(np.int64))
+
+
+def gate(rollout: Rollout, observed: np.ndarray, threshold: float) -> np.ndarray:
+    """The decision rule: predicted parents (Q, S, N) from a rollout of Shape (S, Q, N).
+
+    threshold 0: the per-node argmax of each step (the paper). threshold t > 0: a node is predicted to move to the
+    most likely parent other than the observed one once that parent's probability reaches t, else to stay; for
+    t >= 0.5 this is the argmax, counted only when its probability reaches t. observed: Shape (Q, N).
+    """
+    observed = np.asarray(observed)[None]
+    if threshold <= 0.0:
+        gated = rollout.parent
+    else:
+        gated = np.where(rollout.other_confidence >= threshold, rollout.other, observed)
+    return np.transpose(gated, (1, 0, 2))
+
+
+def first_change(observed: np.ndarray, sequence: np.ndarray, steps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Whether and where each node first leaves its observed parent within its first `steps` steps.
+
+    observed: (Q, N); sequence: (Q, K, N) parents at t + 1 .. t + K; steps: (Q,) steps that count.
+    Returns changed (Q, N) bool and destination (Q, N) int (-1 where unchanged).
+    """
+    counted = np.arange(sequence.shape[1])[None, :] < np.asarray(steps)[:, None]  # (Q, K)
+    differs = (sequence != observed[:, None, :]) & counted[:, :, None]
+    changed = differs.any(axis=1)
+    first = differs.argmax(axis=1)
+    destination = np.take_along_axis(sequence, first[:, None, :], axis=1)[:, 0]
+    return changed, np.where(changed, destination, -1)
+
+
+@dataclass(frozen=True)
+class Counts:
+    """Object-queries in each outcome (integers), summed over queries."""
+
+    used_correct: int = 0
+    used_wrong: int = 0
+    used_missed: int = 0
+    unused_correct: int = 0
+    unused_wrong: int = 0
+
+    def __add__(self, other: Counts) -> Counts:
+        return Counts(*(getattr(self, f.name) + getattr(other, f.name) for f in fields(self)))
+
+    @property
+    def used(self) -> int:
+        return self.used_correct + self.used_wrong + self.used_missed
+
+    @property
+    def unused(self) -> int:
+        return self.unused_correct + self.unused_wrong
+
+    def objective(self) -> float:
+        """The tuning objective, the same for every method: used correct % - used wrong % - unused wrong %.
+
+        Each reported percentage weighs the same, so moving 1% of the unused objects costs as much as getting 1% of
+        the used ones wrong (a count-based sum would let the far larger unused pool silence every baseline).
+        """
+        used = 100.0 * (self.used_correct - self.used_wrong) / self.used if self.used else 0.0
+        return used - (100.0 * self.unused_wrong / self.unused if self.unused else 0.0)
+
+    def percentages(self) -> dict[str, dict[str, float]]:
+        """{"used": {"correct", "wrong", "missed"}, "unused": {"correct", "wrong"}} in 0..100 (NaN if no objects)."""
+        def pct(part: int, whole: int) -> float:
+            return 100.0 * part / whole if whole else float("nan")
+        return {"used": {"correct": pct(self.used_correct, self.used), "wrong": pct(self.used_wrong, self.used),
+                         "missed": pct(self.used_missed, self.used)},
+                "unused": {"correct": pct(self.unused_correct, self.unused),
+                           "wrong": pct(self.unused_wrong, self.unused)}}
+
+
+def score(queries: Queries, predicted: np.ndarray, window_steps: int, movable: np.ndarray,
+          pool: np.ndarray | None = None) -> Counts:
+    """Count outcomes of predicted parents (Q, K', N), K' >= window_steps, against the truth.
+
+    movable: (N,) bool, the objects scored. pool: (N,) bool, the objects counted among the unused ones
+    (default: every movable node).
+    """
+    if window_steps < 1 or window_steps > min(predicted.shape[1], queries.future.shape[1]):
+        raise ModelError(f"window of {window_steps} steps; predictions and truth cover 1..{predicted.shape[1]}")
+    steps = np.minimum(queries.valid, window_steps)
+    true_moved, true_dest = first_change(queries.observed, queries.future, steps)
+    pred_moved, pred_dest = first_change(queries.observed, predicted, steps)
+    movable = np.asarray(movable, dtype=bool)[None]
+    pool = movable if pool is None else (np.asarray(pool, dtype=bool)[None] & movable)
+    used, unused = true_moved & movable, ~true_moved & pool
+    right = pred_moved & (pred_dest == true_dest)
+    return Counts(int((used & right).sum()), int((used & pred_moved & ~right).sum()), int((used & ~pred_moved).sum()),
+                  int((unused & ~pred_moved).sum()), int((unused & pred_moved).sum()))
+
+
+def window_steps(window_min: int, grid_min: int) -> int:
+    """Minutes -> grid steps; the window must be a positive multiple of the grid."""
+    if window_min <= 0 or window_min % grid_min:
+        raise ModelError(f"window of {window_min} min; use a positive multiple of {grid_min} min (10, 20, ..., 120)")
+    return window_min // grid_min

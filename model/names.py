@@ -1,0 +1,8 @@
+"""Method names, importable without torch (the CLI's help text and argument checks use them)."""
+
+from __future__ import annotations
+
+GNN_METHODS = ("gnn", "gnn_no_attention", "gnn_linear_time")
+BASELINE_METHODS = ("fremen", "fremen_prior", "static_semantic", "last_seen", "markov")
+METHODS = (*GNN_METHODS, *BASELINE_METHODS)
+DEFAULT_METHODS = ("gnn", "fremen", "fremen_prior", "static_semantic", "last_seen", "markov")
