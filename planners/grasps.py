@@ -18,6 +18,13 @@ MAX_WIDTH = 0.13  # m: widest grasp (stroke 0.14 m minus a margin)
 MIN_HEIGHT = 0.008  # m: thinner objects leave the pads nothing to hold above the support
 PAD_HALF = 0.025  # m: half length of a finger pad along the approach axis
 SUPPORT_CLEARANCE = 0.006  # m between the fingertips and the supporting surface
+SIDE_HEIGHT = 0.4  # fraction of an object's height at which a side grasp holds it
+SIDE_MIN_Z = 0.035  # m above the support: the palm (0.03 m half height) clears the shelf
+SIDE_MARGIN = 0.01  # m per finger between an open pad and the object before a side grasp closes
+SIDE_DEPTH = 0.022  # m from an object's near face to the grip site: the palm (0.035 m behind it) stays clear
+PALM_SETBACK = 0.027  # m: the palm's front face lies 0.035 m behind the grip site; 8 mm to spare
+SIDE_MIN_OVERLAP = 0.015  # m of the object's depth between the pads
+GRIPPER_OPEN = 0.07  # m per finger, the gripper's stroke
 
 
 @dataclass(frozen=True)
@@ -35,12 +42,23 @@ class Grasp:
 
 
 def matrix_to_quat(r: np.ndarray) -> np.ndarray:
-    """Unit wxyz quaternion of a rotation matrix (shape (3, 3))."""
-    w = math.sqrt(max(0.0, 1.0 + r[0, 0] + r[1, 1] + r[2, 2])) / 2
-    x = math.copysign(math.sqrt(max(0.0, 1.0 + r[0, 0] - r[1, 1] - r[2, 2])) / 2, r[2, 1] - r[1, 2])
-    y = math.copysign(math.sqrt(max(0.0, 1.0 - r[0, 0] + r[1, 1] - r[2, 2])) / 2, r[0, 2] - r[2, 0])
-    z = math.copysign(math.sqrt(max(0.0, 1.0 - r[0, 0] - r[1, 1] + r[2, 2])) / 2, r[1, 0] - r[0, 1])
-    q = np.array([w, x, y, z])
+    """Unit wxyz quaternion of a rotation matrix (shape (3, 3)), w >= 0; exact for half turns too (Shepperd's
+    method: the largest of w, x, y, z is taken from the diagonal, the others from the off-diagonal terms)."""
+    trace = r[0, 0] + r[1, 1] + r[2, 2]
+    k = int(np.argmax([trace, r[0, 0], r[1, 1], r[2, 2]]))
+    if k == 0:
+        s = 2.0 * math.sqrt(max(1.0 + trace, 0.0))
+        q = np.array([s / 4, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s])
+    elif k == 1:
+        s = 2.0 * math.sqrt(max(1.0 + r[0, 0] - r[1, 1] - r[2, 2], 0.0))
+        q = np.array([(r[2, 1] - r[1, 2]) / s, s / 4, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s])
+    elif k == 2:
+        s = 2.0 * math.sqrt(max(1.0 - r[0, 0] + r[1, 1] - r[2, 2], 0.0))
+        q = np.array([(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, s / 4, (r[1, 2] + r[2, 1]) / s])
+    else:
+        s = 2.0 * math.sqrt(max(1.0 - r[0, 0] - r[1, 1] + r[2, 2], 0.0))
+        q = np.array([(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, s / 4])
+    q = q if q[0] >= 0 else -q
     return q / np.linalg.norm(q)
 
 
@@ -84,6 +102,37 @@ def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_x
         centre = np.array([position[0], position[1], grip_z])
         grasps.append(Grasp(centre, top_rotation(finger_yaw), min(0.07, span / 2 + 0.025), kind))
     return grasps
+
+
+def side_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,
+                front: float = np.inf) -> list[Grasp]:
+    """Horizontal grasps of an upright object on a shelf inside furniture, approached from the front.
+
+    outward: horizontal unit vector (shape (2,) or (3,)) out of the furniture's front, towards the robot. The
+    grip x points into the furniture, the fingers close across the object (horizontally), the pads sit
+    SIDE_HEIGHT of the object's height above its support (at least SIDE_MIN_Z, so the palm clears the shelf).
+    front: how far (m) the furniture's front plane lies out from the object's centre along `outward`; the palm
+    (18 cm wide) stays in front of it, so the pads may hold only the object's front part (at least
+    SIDE_MIN_OVERLAP deep).
+    """
+    sx, sy, sz = cls.size
+    out = np.array([outward[0], outward[1], 0.0]) / np.linalg.norm(outward[:2])
+    across = np.array([-out[1], out[0], 0.0])
+    yaw = 2.0 * math.atan2(quat[3], quat[0])
+    body_x = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+    body_y = np.array([-body_x[1], body_x[0], 0.0])
+    width = abs(np.dot(across, body_x)) * sx + abs(np.dot(across, body_y)) * sy  # extent along the finger travel
+    depth = abs(np.dot(out, body_x)) * sx + abs(np.dot(out, body_y)) * sy  # extent along the approach
+    if width > MAX_WIDTH or sz < SIDE_MIN_Z + 0.01:
+        return []
+    support = position[2] - sz / 2
+    z = support + min(max(SIDE_HEIGHT * sz, SIDE_MIN_Z), sz - 0.015)
+    rotation = np.column_stack([-out, across, np.cross(-out, across)])
+    along = max(depth / 2 - SIDE_DEPTH, front - PALM_SETBACK)  # grip site out from the centre, m
+    if depth / 2 - (along - PAD_HALF) < SIDE_MIN_OVERLAP:
+        return []
+    centre = np.array([position[0], position[1], z]) + out * along
+    return [Grasp(centre, rotation, min(GRIPPER_OPEN, width / 2 + SIDE_MARGIN), "side")]
 
 
 def _rim_grasps(hollow, position: np.ndarray, yaw: float, support: float, robot_xy: np.ndarray) -> list[Grasp]:

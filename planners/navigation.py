@@ -64,8 +64,7 @@ class Navigator:
             raise NavigationError(f"{node!r} is not furniture; known: {', '.join(sorted(self.furniture))}")
         f = self.furniture[node]
         depth = f.size[1]
-        normal = local_to_world(f, np.array([[1.0, 0.0, 0.0]])) - local_to_world(f, np.zeros((1, 3)))
-        normal = normal[0, :2] / np.linalg.norm(normal[0, :2])
+        normal = self.front_normal(node)
         tangent = np.array([-normal[1], normal[0]])
         front = np.array(f.pos) + normal * depth / 2
         along = float(np.dot(np.asarray(target_xy) - front, tangent))
@@ -77,6 +76,12 @@ class Navigator:
                     yaw = math.atan2(-normal[1], -normal[0])
                     return float(xy[0]), float(xy[1]), yaw
         raise NavigationError(f"no free base pose in front of {node} near {np.round(target_xy, 2).tolist()}")
+
+    def front_normal(self, node: str) -> np.ndarray:
+        """Unit horizontal vector (shape (2,)) out of the front of furniture `node`."""
+        f = self.furniture[node]
+        normal = local_to_world(f, np.array([[1.0, 0.0, 0.0]])) - local_to_world(f, np.zeros((1, 3)))
+        return normal[0, :2] / np.linalg.norm(normal[0, :2])
 
     def path_to(self, goal: tuple[float, float, float]) -> list[tuple[float, float]]:
         """Waypoints (x, y) in m from the base's current position to `goal`, avoiding open doors."""

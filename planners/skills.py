@@ -11,13 +11,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from homer_sim.catalog import CATALOG
-from homer_sim.graph import INSIDE, ON
+from homer_sim.graph import INSIDE, ON, RELATION_NAMES
 from homer_sim.observe import SceneGraphObserver
 from homer_sim.spots import Spots
+from homer_sim.validate import ROBOT_RADIUS
+from planners.articulate import base_candidates
 from planners.control import Controller
-from planners.grasps import Grasp, matrix_to_quat, top_grasps, ungraspable_reason
+from planners.door_skills import ARC_BASE_COST, ClearanceCheck, PartMover
+from planners.grasps import Grasp, matrix_to_quat, side_grasps, top_grasps, ungraspable_reason
 from planners.ik import IKSolver
-from planners.navigation import NavigationError, Navigator
+from planners.navigation import CLEARANCE, NavigationError, Navigator
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to
 LIFT = 0.15  # m
@@ -28,6 +31,10 @@ RAISED_TORSO = 0.3  # m
 CARRY_REACH = 0.35  # m from the base centre
 CARRY_HEIGHT = 1.05  # m
 RAISED_SHOULDER = -1.0  # rad: upper arm raised above the tuck
+SIDE_LIFT = 0.03  # m: a side grasp first lifts the object this much off its shelf,
+SIDE_PULL = 0.35  # m: then draws it this far out of the furniture,
+SIDE_RAISE = 0.09  # m: then raises it this much more
+PULL_BASE_COST = 0.1  # IK damping on the base while drawing an object out: the base backs away
 
 
 @dataclass(frozen=True)
@@ -53,18 +60,21 @@ class Robot:
         self.held: str | None = None
         self.folded = True  # the arm is in (or moving from) the tuck posture
         self.shoulder_lift = self.ik.model.joint("shoulder_lift").qposadr[0]
+        self.clearance = ClearanceCheck(world, self.controller)
 
     # --- motion helpers ---------------------------------------------------------------------------------
     def _ik(self, position: np.ndarray, rotation_quat: np.ndarray, seeds: bool = True):
         return self.ik.solve(self.controller.target, position, rotation_quat, base_cost=GRASP_BASE_COST,
                              seeds=seeds)
 
-    def _line(self, start: np.ndarray, end: np.ndarray, quat: np.ndarray, steps: int = 4) -> list[np.ndarray] | None:
-        """IK configurations along the straight grip-site line start -> end (m), or None if any is unreachable."""
+    def _line(self, start: np.ndarray, end: np.ndarray, quat: np.ndarray, steps: int = 4,
+              base_cost: float = GRASP_BASE_COST) -> list[np.ndarray] | None:
+        """IK configurations along the straight grip-site line start -> end (m), or None if any is unreachable;
+        base_cost: IK damping on the base (low lets the base back away, e.g. drawing an object off a shelf)."""
         q = self.controller.target.copy()
         path = []
         for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
-            result = self.ik.solve(q, start + s * (end - start), quat, base_cost=GRASP_BASE_COST, seeds=False)
+            result = self.ik.solve(q, start + s * (end - start), quat, base_cost=base_cost, seeds=False)
             if not result.converged:
                 return None
             q = result.q
@@ -104,6 +114,27 @@ class Robot:
         posture = self.tuck.copy() if self.folded else self._carry_posture()
         self.navigator.drive_to(goal, posture)
 
+    def _go_to_grasp(self, grasp: Grasp) -> bool:
+        """Drive (arm tucked) to a free base pose from which `grasp` and its approach are reachable with the
+        arm clear of the apartment; False if there is none."""
+        quat = grasp.quat()
+        above = grasp.position - APPROACH * grasp.rotation[:, 0]
+        obstacles = self.navigator.open_part_rects()
+        for base in base_candidates(grasp.position, grasp.rotation, None):
+            if not self.navigator.plan.disk_is_free(base[0], base[1], ROBOT_RADIUS + CLEARANCE, obstacles):
+                continue
+            q = self.tuck.copy()
+            q[:3] = base
+            pre = self.ik.solve(q, above, quat, base_cost=ARC_BASE_COST)
+            if not pre.converged or not self.clearance.clear(pre.q):
+                continue
+            at = self.ik.solve(pre.q, grasp.position, quat, base_cost=ARC_BASE_COST, seeds=False)
+            if at.converged and self.clearance.clear(at.q):
+                self.retract()
+                self.navigator.drive_to(base, self.tuck)
+                return True
+        return False
+
     def _carry_posture(self) -> np.ndarray:
         """A configuration holding the grip site close in front of the base, orientation kept."""
         x, y, yaw = self.controller.target[:3]
@@ -120,14 +151,24 @@ class Robot:
             return SkillResult(False, f"{name}: not graspable ({reason})")
         graph = self.observer.update()
         node = node or graph.parent_of(name)
-        position, _ = self.world.object_pose(name)
+        position, quat = self.world.object_pose(name)
+        furniture = self.navigator.furniture.get(node)
+        inside = graph.relation_of(name) == RELATION_NAMES[INSIDE] and furniture is not None
         try:
-            self.go_to(node, position[:2])
+            if inside and furniture.kind == "cabinet":  # on a shelf: from the front, the base placed for it
+                out = self.navigator.front_normal(node)
+                front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
+                grasps = side_grasps(cls, position, quat, out, front)
+                if not grasps or not self._go_to_grasp(grasps[0]):
+                    return SkillResult(False, f"{name}: no free base pose from which a side grasp in {node} is "
+                                              "reachable without touching it")
+            else:
+                self.go_to(node, position[:2])
+                grasps = top_grasps(cls, position, quat, self.controller.q()[:2])
         except NavigationError as error:
             return SkillResult(False, f"{name}: {error}")
         failures = []
-        position, quat = self.world.object_pose(name)
-        for grasp in top_grasps(cls, position, quat, self.controller.q()[:2]):
+        for grasp in grasps:
             outcome = self._try_grasp(name, grasp)
             if outcome.success:
                 self.held = name
@@ -136,8 +177,10 @@ class Robot:
         return SkillResult(False, f"{name}: every grasp failed ({'; '.join(failures)})")
 
     def _try_grasp(self, name: str, grasp: Grasp) -> SkillResult:
+        """Approach against the grip x axis (from above, or from the front for side grasps), close, lift."""
         quat = grasp.quat()
-        above = grasp.position + np.array([0.0, 0.0, APPROACH])
+        back = -grasp.rotation[:, 0]  # from the grasp towards where the gripper comes from
+        above = grasp.position + APPROACH * back
         pre = self._ik(above, quat)
         if not pre.converged:
             return SkillResult(False, f"approach pose {pre.reason}")
@@ -153,16 +196,25 @@ class Robot:
         if opening < MIN_HELD_OPENING:
             self._back_off(above, quat)
             return SkillResult(False, f"fingers closed on nothing (opening {opening * 1000:.1f} mm)")
-        up = self._line(grasp.position, grasp.position + np.array([0.0, 0.0, LIFT]), quat)
-        if up is None:
-            self._back_off(above, quat)
-            return SkillResult(False, "the lift leaves the arm's reach")
-        self.controller.move_through(up)
+        up = np.array([0.0, 0.0, 1.0])
+        if grasp.kind == "side":
+            legs = [SIDE_LIFT * up, SIDE_PULL * np.array([back[0], back[1], 0.0]), SIDE_RAISE * up]
+        else:
+            legs = [LIFT * up]
+        point = grasp.position
+        for leg in legs:
+            path = self._line(point, point + leg, quat, base_cost=PULL_BASE_COST if leg[2] == 0 else GRASP_BASE_COST)
+            if path is None:
+                self._back_off(above, quat)
+                return SkillResult(False, "the lift leaves the arm's reach")
+            self.controller.move_through(path)
+            point = point + leg
         self.world.step(int(HOLD_SECONDS / self.world.model.opt.timestep))
         lifted = self.world.object_pose(name)[0][2] - start[2]
-        if lifted < 0.5 * LIFT:
+        rise = float(sum(leg[2] for leg in legs))
+        if lifted < 0.5 * rise:
             self._back_off(above, quat)
-            return SkillResult(False, f"the object rose only {lifted * 100:.1f} cm of {LIFT * 100:.0f} cm")
+            return SkillResult(False, f"the object rose only {lifted * 100:.1f} cm of {rise * 100:.0f} cm")
         return SkillResult(True)
 
     def _back_off(self, above: np.ndarray, quat: np.ndarray) -> None:
@@ -219,6 +271,20 @@ class Robot:
         if parent != node:
             return SkillResult(False, f"place: {name} ended {relation_seen} {parent}, not on {node}")
         return SkillResult(True)
+
+    # --- doors and drawers ---------------------------------------------------------------------------------
+    def open_articulation(self, name: str) -> SkillResult:
+        """Open door or drawer `name` (`<furniture>/<part>`, or a furniture with one part) above openness 0.9,
+        by holding its handle (and a door's free edge past the handle's reach); the arm ends tucked."""
+        if self.held is not None:
+            return SkillResult(False, f"open {name}: the hand holds {self.held}")
+        return SkillResult(*PartMover(self).move_to(name, opening=True))
+
+    def close_articulation(self, name: str) -> SkillResult:
+        """Close door or drawer `name` below openness 0.05 (see `open_articulation`)."""
+        if self.held is not None:
+            return SkillResult(False, f"close {name}: the hand holds {self.held}")
+        return SkillResult(*PartMover(self).move_to(name, opening=False))
 
     def _held_quat(self) -> np.ndarray:
         """The grip site's current orientation (wxyz), kept while carrying."""

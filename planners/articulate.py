@@ -1,0 +1,163 @@
+"""Opening and closing doors and drawers in physics: grasp, follow the part's motion, release, retreat.
+
+The part moves only because the closed fingers hold it (friction; no weld, no qpos writes). A grasp is a grip
+pose fixed in the part's body frame; the motion is a list of part positions (hinge angle in rad, drawer travel
+in m), and each waypoint's grip target is that grasp carried along by the part. For every waypoint a base pose
+is chosen (free of walls, furniture and the moving door, close to the previous one) and the arm is solved by IK
+with the base fixed there, so the base translates and turns as the door swings.
+
+Grasps (all in the part frame, whose x axis is the closed part's outward front normal):
+- `handle`: the handle bar from the front, fingers closing across the bar (the bar is a 2 cm box).
+- `edge`: a hinge door's free vertical edge, pads on both faces of the panel, approached from beyond the edge.
+  The fridge opens against a wall: with the door beyond about 40 degrees the space in front of its outer face
+  (0.13 m at 90 degrees) is too narrow for the forearm, so the swing is finished (and a close is started) by
+  holding the free edge instead of the handle, with the outer finger in that gap.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from planners.grasps import matrix_to_quat
+
+OPEN_TARGET = 0.96  # openness the opening motion aims for (success: above OPEN_OK)
+OPEN_OK = 0.9
+CLOSED_OK = 0.05
+CLOSE_OVERSHOOT = 0.02  # rad or m past the closed limit the motion aims for (the stop holds the part)
+EDGE_FROM = 0.55  # rad: a door open at least this far is swung by its edge; below, by its handle
+HANDLE_UNTIL = 0.7  # rad: how far the handle grasp swings a door before switching to the edge
+STEP_HINGE = math.radians(4.0)  # rad between waypoints
+STEP_SLIDE = 0.03  # m between waypoints
+APPROACH = 0.10  # m the gripper comes from and leaves to, against the grasp's approach axis
+HANDLE_OFFSET = 0.004  # m: grip site this far outward of the bar centre (fingertips clear of the panel)
+EDGE_INSET = 0.025  # m from the free edge to the grip site
+EDGE_ABOVE_HANDLE = 0.15  # m: the edge is held this far above the handle
+PRE_OPENING = 0.03  # m per finger before closing on a 2 cm bar or panel
+MIN_HELD = 0.004  # m per finger: closed further means the fingers missed the 2 cm bar
+SLIP = 0.03  # m between the grip site and the grasp point on the part before a motion is aborted
+BASE_DISTANCES = (0.55, 0.65, 0.45, 0.75, 0.85)  # m from the grip site to the base centre, horizontally
+BASE_TURNS = np.radians([0, 15, -15, 30, -30, 45, -45, 60, -60, 75, -75])  # rad off the grasp's approach
+BASE_CLEARANCE = 0.05  # m between the base and the moving part
+
+
+@dataclass(frozen=True)
+class PartGrasp:
+    """A grip pose in the part's body frame: position (m, shape (3,)), rotation (shape (3, 3), columns = grip
+    x (approach), y (finger travel), z), and the name of the grasp."""
+
+    position: np.ndarray
+    rotation: np.ndarray
+    kind: str
+
+
+def _frame(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    return np.column_stack([x, y, np.cross(x, y)])
+
+
+def handle_grasp(handle_local: np.ndarray, joint_type: str) -> PartGrasp:
+    """The handle from the front: approach along -x (into the part). A door's bar is vertical, so the fingers
+    close along y; a drawer's bar is horizontal, so they close along z."""
+    y = np.array([0.0, 1.0, 0.0]) if joint_type == "hinge" else np.array([0.0, 0.0, 1.0])
+    position = np.asarray(handle_local, float) + np.array([HANDLE_OFFSET, 0.0, 0.0])
+    return PartGrasp(position, _frame(np.array([-1.0, 0.0, 0.0]), y), "handle")
+
+
+def edge_grasp(handle_local: np.ndarray, free_edge_y: float) -> PartGrasp:
+    """A door's free edge at local y = `free_edge_y` (m, the hinge at y = 0), EDGE_ABOVE_HANDLE above the
+    handle: approach along the panel towards the hinge, fingers closing across the panel (along x)."""
+    toward_hinge = -math.copysign(1.0, free_edge_y)
+    position = np.array([0.0, free_edge_y + toward_hinge * EDGE_INSET, handle_local[2] + EDGE_ABOVE_HANDLE])
+    return PartGrasp(position, _frame(np.array([0.0, toward_hinge, 0.0]), np.array([1.0, 0.0, 0.0])), "edge")
+
+
+def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation matrix (3, 3) of `angle` rad about unit `axis` (Rodrigues)."""
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k @ k
+
+
+class PartMotion:
+    """Where a part's body frame is when its joint moves from the current value by `delta` (rad or m).
+
+    Read from the live data once (joint anchor and axis in world, body pose); planning only, never steps.
+    """
+
+    def __init__(self, world, name: str) -> None:
+        a = world.articulation(name)
+        model, data = world.model, world.data
+        self.name = name
+        self.articulation = a
+        self.body = int(model.jnt_bodyid[a.joint_id])
+        self.anchor = data.xanchor[a.joint_id].copy()
+        self.axis = data.xaxis[a.joint_id].copy()
+        self.pos = data.xpos[self.body].copy()
+        self.rot = data.xmat[self.body].reshape(3, 3).copy()
+        self.value = float(data.qpos[a.qpos_adr])
+        site = model.site(f"{name}/handle").id
+        self.handle_local = model.site_pos[site].copy()
+        geoms = [g for g in range(model.ngeom) if model.geom_bodyid[g] == self.body]
+        panel = max(geoms, key=lambda g: float(np.prod(model.geom_size[g])))  # the door or drawer front
+        self.panel_center = model.geom_pos[panel].copy()
+        self.panel_half = model.geom_size[panel].copy()
+
+    def pose_at(self, value: float) -> tuple[np.ndarray, np.ndarray]:
+        """(position m, rotation (3, 3)) of the part's body frame with the joint at `value`."""
+        delta = value - self.value
+        if self.articulation.joint_type == "slide":
+            return self.pos + delta * self.axis, self.rot
+        turn = axis_rotation(self.axis, delta)
+        return self.anchor + turn @ (self.pos - self.anchor), turn @ self.rot
+
+    def grip_target(self, grasp: PartGrasp, value: float) -> tuple[np.ndarray, np.ndarray]:
+        """World grip pose (position m, wxyz quaternion) of `grasp` with the joint at `value`."""
+        pos, rot = self.pose_at(value)
+        return pos + rot @ grasp.position, matrix_to_quat(rot @ grasp.rotation)
+
+    def panel_segment(self, value: float) -> tuple[np.ndarray, np.ndarray, float]:
+        """The panel's horizontal footprint as a segment (two xy points, m) and its half thickness (m)."""
+        pos, rot = self.pose_at(value)
+        c, h = self.panel_center, self.panel_half
+        long_axis = 1 if h[1] >= h[0] else 0
+        offset = np.zeros(3)
+        offset[long_axis] = h[long_axis]
+        a, b = pos + rot @ (c - offset), pos + rot @ (c + offset)
+        return a[:2], b[:2], float(h[1 - long_axis])
+
+    def waypoints(self, target: float, step: float) -> np.ndarray:
+        """Joint values from the current one to `target`, at most `step` apart (excluding the start)."""
+        n = max(1, int(math.ceil(abs(target - self.value) / step)))
+        return self.value + (target - self.value) * np.linspace(0.0, 1.0, n + 1)[1:]
+
+
+def segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    """Distance in m from point p to segment ab (all shape (2,))."""
+    ab = b - a
+    t = float(np.clip(np.dot(p - a, ab) / max(float(np.dot(ab, ab)), 1e-12), 0.0, 1.0))
+    return float(np.linalg.norm(p - (a + t * ab)))
+
+
+def base_candidates(grip_pos: np.ndarray, grip_rot: np.ndarray, previous_xy: np.ndarray | None
+                    ) -> list[tuple[float, float, float]]:
+    """Base poses (x m, y m, yaw rad) behind a grip pose, facing it: nearest `previous_xy` first, or, without
+    one, straight behind the grasp first (BASE_TURNS, then BASE_DISTANCES order)."""
+    approach = grip_rot[:2, 0]
+    norm = float(np.linalg.norm(approach))
+    if norm > 0.3 or previous_xy is None:
+        heading = math.atan2(approach[1], approach[0])
+    else:
+        heading = math.atan2(grip_pos[1] - previous_xy[1], grip_pos[0] - previous_xy[0])
+    poses = []
+    for turn in BASE_TURNS:
+        for distance in BASE_DISTANCES:
+            yaw = heading + float(turn)
+            xy = grip_pos[:2] - distance * np.array([math.cos(yaw), math.sin(yaw)])
+            poses.append((float(xy[0]), float(xy[1]), yaw))
+    if previous_xy is None:
+        return poses
+    return sorted(poses, key=lambda p: float(np.linalg.norm(np.array(p[:2]) - previous_xy)) + 0.2 * abs(
+        (p[2] - heading + math.pi) % (2 * math.pi) - math.pi))
+
