@@ -1,0 +1,224 @@
+"""Psi: from the observed scene graph and a predicted rollout, the relocations the robot should make, as a plan.
+
+The paper's formulation: Psi(X_t, X_hat_{t+delta}) -> R, where an object's relocation goes from its parent at t to
+its *first* predicted destination within the window (later predicted moves of the same object do not count). The
+first change is found exactly as the metrics count it (`model.metrics.gate` and `first_change`), so what the robot
+does is what the evaluation scores.
+
+The plan orders the relocations into robot steps: a container (furniture with doors or drawers) is opened before
+anything is taken from or put into it, with an empty hand, and closed after its last use, again with an empty hand.
+Relocations are skipped, with a reason, for objects in the person's hand, objects the robot cannot grasp, moves
+below the confidence threshold, destinations the robot cannot place on, and objects the robot itself placed and
+still holds for the person (`Holds`): the robot never undoes its own help before the person has used it.
+
+Pure logic: numpy and the model's metric functions, no physics.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Collection, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from homer_sim.graph import SceneGraph
+from model.metrics import first_change, gate
+from model.predictor import Rollout
+
+PLACEABLE_CATEGORIES = ("furniture", "appliance")  # what the robot's place skill puts objects on or into
+
+
+@dataclass(frozen=True)
+class Relocation:
+    """Move `obj` from `source` to `destination` (node names), predicted `steps_ahead` grid steps after the query
+    with probability `confidence` (0..1) for that destination."""
+
+    obj: str
+    source: str
+    destination: str
+    steps_ahead: int
+    confidence: float
+
+
+@dataclass(frozen=True)
+class PlanStep:
+    """One robot skill call: `action` is open/close (target: articulation `<furniture>/<part>`), pick (target: the
+    object, `node`: the furniture to stand at) or place (target: the destination node, `node` the same)."""
+
+    action: str
+    target: str
+    node: str = ""
+    obj: str = ""
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The relocations to make, in order; those left out with their reasons; the robot steps that make them."""
+
+    relocations: tuple[Relocation, ...]
+    skipped: tuple[tuple[Relocation, str], ...]
+    steps: tuple[PlanStep, ...]
+
+
+@dataclass(frozen=True)
+class Hold:
+    """The robot put `obj` on `node` at routine minute `since`; it stays there until `until` (min) or until the
+    person moves it."""
+
+    obj: str
+    node: str
+    since: float
+    until: float
+
+
+class Holds:
+    """Objects the robot placed for the person, kept where it put them (the robot's own help is not undone)."""
+
+    def __init__(self) -> None:
+        self.active: dict[str, Hold] = {}
+
+    def add(self, obj: str, node: str, minute: float, until: float) -> None:
+        """Hold `obj` on `node` from routine minute `minute` to `until`."""
+        self.active[obj] = Hold(obj, node, float(minute), float(until))
+
+    def update(self, graph: SceneGraph, minute: float, used: Collection[str] = ()) -> list[Hold]:
+        """Release holds whose window has passed (until < minute), whose object the observed graph shows away from
+        its node (the person moved it), or which are in `used` (e.g. seen in the person's hand); returns them."""
+        released = [h for h in self.active.values()
+                    if h.until < minute or graph.parent_of(h.obj) != h.node or h.obj in used]
+        for hold in released:
+            del self.active[hold.obj]
+        return released
+
+    def reason(self, obj: str) -> str | None:
+        hold = self.active.get(obj)
+        if hold is None:
+            return None
+        return f"held on {hold.node} for the person (placed at {hold.since:.0f} min, until {hold.until:.0f} min)"
+
+
+def first_moves(observed: np.ndarray, rollout: Rollout, threshold: float, window_steps: int,
+                batch: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each node's first predicted move within the window, gated by `threshold` as `model.metrics.gate` does.
+
+    observed: Shape (N,) int, parents at the query step. rollout: arrays of Shape (S, B, N); `batch` picks the query.
+    Returns changed (N,) bool, destination (N,) int (-1 where unchanged), step (N,) int (1-based, 0 where unchanged).
+    """
+    one = Rollout(*(np.asarray(a)[:, batch : batch + 1] for a in (rollout.parent, rollout.confidence, rollout.other,
+                                                                   rollout.other_confidence)))
+    observed = np.asarray(observed, dtype=np.int64)[None]
+    predicted = gate(one, observed, threshold)  # (1, S, N)
+    steps = np.array([min(window_steps, predicted.shape[1])])
+    changed, destination = first_change(observed, predicted, steps)
+    differs = predicted[0] != observed  # (S, N)
+    step = np.where(changed[0], differs.argmax(axis=0) + 1, 0)
+    return changed[0], destination[0], step
+
+
+def destination_confidence(rollout: Rollout, step: int, node: int, destination: int, batch: int = 0) -> float:
+    """Probability of `destination` for `node` at 1-based predicted step `step` (0 if the rollout does not say)."""
+    s = step - 1
+    if rollout.parent[s, batch, node] == destination:
+        return float(rollout.confidence[s, batch, node])
+    if rollout.other[s, batch, node] == destination:
+        return float(rollout.other_confidence[s, batch, node])
+    return 0.0
+
+
+def predicted_relocations(graph: SceneGraph, movable: np.ndarray, rollout: Rollout, threshold: float,
+                          window_steps: int, batch: int = 0) -> tuple[list[Relocation], list[Relocation]]:
+    """(relocations that pass the threshold, argmax moves that do not), for the movable nodes of `graph`.
+
+    movable: Shape (N,) bool. Each relocation is (object, parent at t, first predicted destination) with the step of
+    that first change; with threshold 0 the two lists are the argmax moves and nothing.
+    """
+    movable = np.asarray(movable, dtype=bool)
+    gated = first_moves(graph.parent, rollout, threshold, window_steps, batch)
+    argmax = first_moves(graph.parent, rollout, 0.0, window_steps, batch)
+    passed, below = [], []
+    for (changed, destination, step), out in ((gated, passed), (argmax, below)):
+        for i in np.flatnonzero(changed & movable):
+            if out is below and gated[0][i]:
+                continue
+            dest, k = int(destination[i]), int(step[i])
+            out.append(Relocation(graph.nodes[i], graph.nodes[int(graph.parent[i])], graph.nodes[dest], k,
+                                  destination_confidence(rollout, k, int(i), dest, batch)))
+    return passed, below
+
+
+def anchor_of(graph: SceneGraph, movable: np.ndarray, node: str) -> str:
+    """The first non-movable node at or above `node` (the furniture, appliance or room it is reached at)."""
+    i = graph.index(node)
+    while movable[i] and graph.parent[i] >= 0:
+        i = int(graph.parent[i])
+    return graph.nodes[i]
+
+
+def plan_relocations(graph: SceneGraph, movable: np.ndarray, relocations: Sequence[Relocation],
+                     containers: Mapping[str, Sequence[str]], skip: Callable[[Relocation], str | None],
+                     already_open: Collection[str] = ()) -> Plan:
+    """Order relocations into robot steps, leaving out those `skip` gives a reason for.
+
+    containers: furniture name -> its articulations (`<furniture>/<part>`); every part of a container is opened
+    before the first relocation that takes from or puts into it and closed after the last one (only containers
+    the plan opened: those in `already_open` stay as the person left them). Relocations run in order of their
+    first predicted step, grouped by container; an object headed into another relocated object goes after it.
+    """
+    movable = np.asarray(movable, dtype=bool)
+    kept, skipped = [], []
+    for relocation in relocations:
+        reason = skip(relocation)
+        category = graph.categories[graph.index(relocation.destination)]
+        if reason is None and category not in PLACEABLE_CATEGORIES:
+            reason = (f"destination {relocation.destination} is a {category}; the robot places only on "
+                      f"{' or '.join(PLACEABLE_CATEGORIES)}")
+        if reason is None:
+            kept.append(relocation)
+        else:
+            skipped.append((relocation, reason))
+
+    def used_containers(r: Relocation) -> list[str]:
+        ends = (anchor_of(graph, movable, r.source), r.destination)
+        return [c for c in dict.fromkeys(ends) if c in containers]
+
+    kept.sort(key=lambda r: (r.steps_ahead, anchor_of(graph, movable, r.source), r.obj))
+    moving = {r.obj for r in kept}
+    kept.sort(key=lambda r: r.destination in moving)  # stable: objects headed into moved objects go last
+    steps: list[PlanStep] = []
+    opened: list[str] = []
+    for k, r in enumerate(kept):
+        for container in used_containers(r):
+            if container not in opened and container not in already_open:
+                steps += [PlanStep("open", part, container) for part in containers[container]]
+                opened.append(container)
+        source_anchor = anchor_of(graph, movable, r.source)
+        steps += [PlanStep("pick", r.obj, source_anchor, r.obj), PlanStep("place", r.destination, r.destination, r.obj)]
+        later = {c for rest in kept[k + 1 :] for c in used_containers(rest)}
+        for container in [c for c in opened if c not in later][::-1]:
+            steps += [PlanStep("close", part, container) for part in containers[container]][::-1]
+            opened.remove(container)
+    return Plan(tuple(kept), tuple(skipped), tuple(steps))
+
+
+def psi(graph: SceneGraph, movable: np.ndarray, rollout: Rollout, *, threshold: float, window_steps: int,
+        containers: Mapping[str, Sequence[str]], carried: Collection[str] = (),
+        excluded: Callable[[str], str | None] = lambda obj: None, holds: Holds | None = None,
+        already_open: Collection[str] = ()) -> Plan:
+    """The robot's plan for one query: relocations from `graph` (observed at t) to the rollout's first predicted
+    destinations within `window_steps` grid steps, gated by `threshold`, ordered by `plan_relocations`.
+
+    carried: objects in the person's hand. excluded: object name -> why the robot cannot grasp it (None if it can).
+    holds: objects the robot placed and keeps for the person. Moves that do not reach the threshold are reported
+    among the skipped ones.
+    """
+    passed, below = predicted_relocations(graph, movable, rollout, threshold, window_steps)
+
+    def skip(r: Relocation) -> str | None:
+        if r.obj in carried:
+            return "in the person's hand"
+        held = holds.reason(r.obj) if holds is not None else None
+        return held or excluded(r.obj)
+
+    plan = plan_relocations(graph, movable, passed, containers, skip, already_open)
+    low = tuple((r, f"confidence {r.confidence:.2f} below the threshold {threshold:.2f}") for r in below)
+    return Plan(plan.relocations, plan.skipped + low, plan.steps)
