@@ -30,6 +30,8 @@ GRASP_BASE_COST = 100.0  # IK damping on the base while grasping
 RAISED_TORSO = 0.3  # m
 CARRY_REACH = 0.35  # m from the base centre
 CARRY_HEIGHT = 1.05  # m
+CARRY_SLIP = 0.03  # m the held object may shift in the hand while carried before a place gives up
+CARRY_STEP = 0.05  # m between IK waypoints on the way to the carry point
 RAISED_SHOULDER = -1.0  # rad: upper arm raised above the tuck
 SIDE_LIFT = 0.03  # m: a side grasp first lifts the object this much off its shelf,
 SIDE_PULL = 0.35  # m: then draws it this far out of the furniture,
@@ -111,7 +113,12 @@ class Robot:
         """Drive to a free base pose in front of furniture `node`, facing `target_xy`: with the arm tucked, or
         while holding an object with the grip site CARRY_REACH m in front of the base at CARRY_HEIGHT m."""
         goal = self.navigator.stand_pose(node, tuple(target_xy))
-        posture = self.tuck.copy() if self.folded else self._carry_posture()
+        if self.folded:
+            posture = self.tuck.copy()
+        else:
+            path = self._carry_path()
+            self.controller.move_through(path)
+            posture = path[-1]
         self.navigator.drive_to(goal, posture)
 
     def _go_to_grasp(self, grasp: Grasp) -> bool:
@@ -135,12 +142,24 @@ class Robot:
                 return True
         return False
 
-    def _carry_posture(self) -> np.ndarray:
-        """A configuration holding the grip site close in front of the base, orientation kept."""
+    def _carry_path(self) -> list[np.ndarray]:
+        """Configurations (each shape (13,)) along a straight grip-site line from where the hand is to the carry
+        point, CARRY_REACH m in front of the base at CARRY_HEIGHT m, orientation kept; a joint-space move there
+        could swing the held object down through the furniture or out of the fingers. Where the line leaves
+        the arm's reach, the hand stays at the last reachable point."""
         x, y, yaw = self.controller.target[:3]
         point = np.array([x + CARRY_REACH * np.cos(yaw), y + CARRY_REACH * np.sin(yaw), CARRY_HEIGHT])
-        result = self._ik(point, self._held_quat())
-        return result.q if result.converged else self.controller.target.copy()
+        quat = self._held_quat()
+        start = self.world.data.site("robot/grip").xpos.copy()
+        steps = max(2, int(np.ceil(np.linalg.norm(point - start) / CARRY_STEP)))
+        q, path = self.controller.target.copy(), []
+        for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
+            result = self.ik.solve(q, start + s * (point - start), quat, base_cost=GRASP_BASE_COST, seeds=False)
+            if not result.converged:
+                break
+            q = result.q
+            path.append(q)
+        return path or [self.controller.target.copy()]
 
     # --- pick --------------------------------------------------------------------------------------------
     def pick(self, name: str, node: str | None = None) -> SkillResult:
@@ -247,6 +266,11 @@ class Robot:
             self.go_to(node, target[:2])
         except NavigationError as error:
             return SkillResult(False, f"place: {error}")
+        carried = self.world.data.site("robot/grip").xpos - self.world.object_pose(name)[0]
+        if np.linalg.norm(carried - offset) > CARRY_SLIP:
+            self.held = None
+            return SkillResult(False, f"place: {name} slipped {np.linalg.norm(carried - offset) * 100:.1f} cm in "
+                                      "the hand while carried")
         quat = self._held_quat()
         release = target + offset + np.array([0.0, 0.0, 0.01])
         above = release + np.array([0.0, 0.0, APPROACH])

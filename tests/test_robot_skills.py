@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from homer_sim.graph import INSIDE, RELATION_NAMES
+from homer_sim.graph import INSIDE, ON, RELATION_NAMES
 from homer_sim.world import World
 from planners.robot import add_robot
 from planners.skills import Robot
@@ -12,7 +12,8 @@ from planners.skills import Robot
 
 def _others_moved(world: World, before: np.ndarray, moved: str) -> tuple[float, str]:
     drift = np.linalg.norm(world.object_positions() - before, axis=1)
-    drift[world.object_index(moved)] = 0.0
+    if moved:
+        drift[world.object_index(moved)] = 0.0
     k = int(np.argmax(drift))
     return float(drift[k]), world.object_names[k]
 
@@ -47,3 +48,40 @@ def test_pick_reports_a_clear_reason_for_ungraspable_objects() -> None:
     result = robot.pick("mail")
     assert not result.success
     assert "mail" in result.reason and "thin" in result.reason
+
+
+def test_robot_fetches_milk_from_the_fridge_to_the_dining_table() -> None:
+    world = World(extras=[add_robot])
+    world.settle()
+    robot = Robot(world, np.random.default_rng(5))
+    graph = robot.observer.observe_all()
+    assert graph.parent_of("milk") == "fridge" and graph.relation_of("milk") == RELATION_NAMES[INSIDE]
+    before = world.object_positions()
+    start = world.object_pose("milk")[0]
+
+    opened = robot.open_articulation("fridge/door")
+    assert opened.success, opened.reason
+    assert world.openness("fridge/door") > 0.9
+    graph = robot.observer.update()
+    assert graph.parent_of("milk") == "fridge"  # opening the door leaves the milk where it was
+    drift, name = _others_moved(world, before, "")
+    assert drift < 0.02, f"{name} moved {drift * 100:.1f} cm while the door opened"
+
+    picked = robot.pick("milk")
+    assert picked.success, picked.reason
+    assert world.object_pose("milk")[0][2] - start[2] > 0.05  # held by the fingers, off its shelf
+
+    placed = robot.place("table_dining_room")
+    assert placed.success, placed.reason
+    graph = robot.observer.update()
+    assert graph.parent_of("milk") == "table_dining_room"
+    assert graph.relation_of("milk") == RELATION_NAMES[ON]
+
+    closed = robot.close_articulation("fridge/door")
+    assert closed.success, closed.reason
+    assert world.openness("fridge/door") < 0.05
+    graph = robot.observer.update()
+    assert graph.parent_of("milk") == "table_dining_room"
+    drift, name = _others_moved(world, before, "milk")
+    assert drift < 0.02, f"{name} moved {drift * 100:.1f} cm"
+    assert world.warnings() == 0 and not world.has_nan()
