@@ -243,6 +243,8 @@ def build_parser() -> argparse.ArgumentParser:
     from model.cli import register as register_model  # train, evaluate (torch is imported only when they run)
 
     register_model(commands)
+    from planners.grasp_suite import register as register_grasp_suite
+    register_grasp_suite(commands)
     return parser
 
 

@@ -19,7 +19,10 @@ from homer_sim.validate import ROBOT_RADIUS
 from planners.control import Controller
 
 STAND_DISTANCES = np.arange(0.34, 0.81, 0.02)  # m from the furniture's front face to the base centre
-STAND_OFFSETS = np.array([0.0, 0.05, -0.05, 0.1, -0.1, 0.15, -0.15, 0.2, -0.2, 0.3, -0.3])  # m along the face
+STAND_OFFSETS = np.array([0.0, 0.05, -0.05, 0.1, -0.1, 0.15, -0.15, 0.2, -0.2, 0.3, -0.3, 0.4, -0.4])  # m along
+# the face
+NEAR_DISTANCES = (0.5, 0.6, 0.7)  # m from an object on the floor to the base centre
+NEAR_TURNS = np.radians(np.arange(0, 360, 30))  # rad around an object on the floor, from the robot's side
 WAYPOINT_STRIDE = 4  # keep every 4th grid cell of a path
 CLEARANCE = 0.02  # m beyond ROBOT_RADIUS
 
@@ -76,6 +79,21 @@ class Navigator:
                     yaw = math.atan2(-normal[1], -normal[0])
                     return float(xy[0]), float(xy[1]), yaw
         raise NavigationError(f"no free base pose in front of {node} near {np.round(target_xy, 2).tolist()}")
+
+    def stand_near(self, target_xy: tuple[float, float]) -> tuple[float, float, float]:
+        """A free base pose (x m, y m, yaw rad) facing `target_xy` (m, world) from NEAR_DISTANCES away, for an
+        object on the floor: the side nearest the base's current position first."""
+        target = np.asarray(target_xy, dtype=float)
+        here = self.controller.q()[:2]
+        toward_here = math.atan2(here[1] - target[1], here[0] - target[0])
+        obstacles = self.open_part_rects()
+        for turn in NEAR_TURNS:
+            for distance in NEAR_DISTANCES:
+                angle = toward_here + float(turn)
+                xy = target + distance * np.array([math.cos(angle), math.sin(angle)])
+                if self.plan.disk_is_free(float(xy[0]), float(xy[1]), ROBOT_RADIUS + CLEARANCE, obstacles):
+                    return float(xy[0]), float(xy[1]), angle + math.pi
+        raise NavigationError(f"no free base pose near {np.round(target, 2).tolist()} on the floor")
 
     def front_normal(self, node: str) -> np.ndarray:
         """Unit horizontal vector (shape (2,)) out of the front of furniture `node`."""

@@ -181,6 +181,11 @@ class Robot:
                 if not grasps or not self._go_to_grasp(grasps[0]):
                     return SkillResult(False, f"{name}: no free base pose from which a side grasp in {node} is "
                                               "reachable without touching it")
+            elif furniture is None:  # on the floor of a room
+                goal = self.navigator.stand_near(tuple(position[:2]))
+                self.retract()
+                self.navigator.drive_to(goal, self.tuck)
+                grasps = top_grasps(cls, position, quat, self.controller.q()[:2])
             else:
                 self.go_to(node, position[:2])
                 grasps = top_grasps(cls, position, quat, self.controller.q()[:2])

@@ -1,0 +1,339 @@
+"""`homer grasp-suite`: the grasp regression suite, and `register(subparsers)` for the `homer` parser.
+
+Every robot-graspable object class in the apartment is picked several times by `planners.skills.Robot`, each
+time from a randomised start pose on its home surface or shelf (position jitter, yaw). The scene is set up by
+the suite, not the robot: the apartment's settled start state, the doors or drawer holding the object opened,
+the object moved to its trial pose, the robot tucked in front of the furniture. From there on only physics
+moves anything. A trial succeeds when the object is at least MIN_LIFT m above its start, stays there for
+HOLD_SECONDS of physics, and slips less than MAX_SLIP m relative to the grip site meanwhile (no MuJoCo warning
+or NaN either). Classes that `planners.grasps.ungraspable_reason` rejects are listed as excluded, with that
+reason.
+
+mujoco and the planners that need it are imported inside the functions that run trials, so `homer --help`
+stays fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+import sys
+import time
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from homer_sim.apartment import default_layout
+from homer_sim.catalog import CATALOG, FAMILIES
+from homer_sim.graph import INSIDE
+
+if TYPE_CHECKING:
+    from homer_sim.world import World
+    from planners.skills import Robot
+
+log = logging.getLogger(__name__)
+
+MIN_LIFT = 0.10  # m above the start height
+HOLD_SECONDS = 3.0  # s of physics the lifted object must stay in the hand
+MAX_SLIP = 0.005  # m the object may move relative to the grip site while held
+JITTER = 0.025  # m: start position uniform within +-JITTER of the home position, in x and y
+YAW_ON = math.pi  # rad: yaw jitter on open surfaces (top grasps take any yaw)
+YAW_INSIDE = math.radians(20.0)  # rad: yaw jitter on shelves and in drawers (objects face the front)
+OPEN_SETUP = 0.96  # openness the suite gives the door or drawer in front of the object
+MAX_PENETRATION = 0.002  # m: a sampled start pose may not press deeper into anything
+POSE_TRIES = 30
+TARGET_OVERALL = 0.95
+TARGET_CLASS = 0.8
+DEFAULT_TRIALS = 3
+QUICK_TRIALS = 1
+
+
+@dataclass(frozen=True)
+class TrialResult:
+    """One pick of one object: success, why not, the lift (m) and slip (m) measured, wall time (s)."""
+
+    cls: str
+    success: bool
+    reason: str
+    lift_m: float
+    slip_m: float
+    wall_s: float
+
+
+def suite_classes() -> tuple[dict[str, str], dict[str, str]]:
+    """({class: the instance the suite picks}, {excluded class: reason}) over the apartment's movable objects,
+    in layout order (the first instance of each class)."""
+    from planners.grasps import ungraspable_reason
+
+    included: dict[str, str] = {}
+    excluded: dict[str, str] = {}
+    for obj in default_layout().objects:
+        if obj.cls in included or obj.cls in excluded:
+            continue
+        reason = ungraspable_reason(CATALOG[obj.cls])
+        if reason is None:
+            included[obj.cls] = obj.name
+        else:
+            excluded[obj.cls] = reason
+    return included, excluded
+
+
+def quick_subset(included: dict[str, str]) -> dict[str, str]:
+    """One class of each shape family (the first in layout order), the fast representative subset."""
+    chosen: dict[str, str] = {}
+    for family in FAMILIES:
+        for cls, name in included.items():
+            if CATALOG[cls].family == family:
+                chosen[cls] = name
+                break
+    return chosen
+
+
+# --- one trial ------------------------------------------------------------------------------------------
+def _open_holder(world: World, name: str) -> None:
+    """Open what closes over object `name`: every door of the cabinet it is in, or the drawer it lies in (its
+    contents carried along with the drawer, as the open drawer would carry them)."""
+    from homer_sim.furniture import furniture_geometry
+
+    decl = world.layout.objects[world.object_index(name)]
+    furniture = world.layout.furniture_by_name().get(decl.parent)
+    if furniture is None or decl.level is None:
+        return
+    geometry = furniture_geometry(furniture)
+    drawer = geometry.places[decl.level].part if decl.level < len(geometry.places) else None
+    if drawer is not None:
+        a = world.articulation(f"{furniture.name}/{drawer}")
+        before = float(world.data.qpos[a.qpos_adr])
+        world.set_openness(a.name, OPEN_SETUP)
+        shift = (float(world.data.qpos[a.qpos_adr]) - before) * world.data.xaxis[a.joint_id]
+        for rider in world.layout.objects:
+            if rider.parent == decl.parent and rider.level == decl.level:
+                pos, quat = world.object_pose(rider.name)
+                world.set_object_pose(rider.name, pos + shift, quat, forward=False)
+    elif decl.relation == INSIDE:
+        for a in world.articulations.values():
+            if a.furniture == furniture.name:
+                world.set_openness(a.name, OPEN_SETUP, forward=False)
+    import mujoco
+
+    mujoco.mj_forward(world.model, world.data)
+
+
+def _penetration(world: World, body: int) -> float:
+    """Deepest penetration (m, >= 0) of any geom of `body` into anything, from the current contacts."""
+    deepest = 0.0
+    for c in world.data.contact[: world.data.ncon]:
+        if body in (world.model.geom_bodyid[c.geom1], world.model.geom_bodyid[c.geom2]):
+            deepest = max(deepest, -float(c.dist))
+    return deepest
+
+
+def _jitter_pose(world: World, name: str, rng: np.random.Generator) -> None:
+    """Move object `name` to a random pose near where it rests: xy within JITTER, yaw within YAW_ON (open
+    surfaces) or YAW_INSIDE (shelves, drawers); a pose that presses into a neighbour or a wall is resampled,
+    and after POSE_TRIES the object stays at its home pose."""
+    decl = world.layout.objects[world.object_index(name)]
+    yaw_range = YAW_INSIDE if decl.relation == INSIDE else YAW_ON
+    home_pos, home_quat = world.object_pose(name)
+    body = int(world.object_body_ids[world.object_index(name)])
+    for _ in range(POSE_TRIES):
+        dx, dy = rng.uniform(-JITTER, JITTER, size=2)
+        yaw = float(rng.uniform(-yaw_range, yaw_range))
+        turn = np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
+        world.set_object_pose(name, home_pos + np.array([dx, dy, 0.0]), _quat_mul(turn, home_quat))
+        if _penetration(world, body) < MAX_PENETRATION:
+            return
+    world.set_object_pose(name, home_pos, home_quat)
+
+
+def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product a * b of wxyz quaternions (shape (4,))."""
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return np.array([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2])
+
+
+def _robot_in_front(world: World, name: str, rng: np.random.Generator) -> Robot:
+    """A fresh `Robot` standing tucked at a free base pose in front of the furniture that holds `name`."""
+    import mujoco
+
+    from planners.skills import Robot
+
+    robot = Robot(world, rng)
+    decl = world.layout.objects[world.object_index(name)]
+    q = robot.tuck.copy()
+    xy = tuple(world.object_pose(name)[0][:2])
+    if decl.parent in robot.navigator.furniture:
+        q[:3] = robot.navigator.stand_pose(decl.parent, xy)
+    else:
+        q[:3] = robot.navigator.stand_near(xy)
+    world.data.qpos[robot.controller.qpos_adr] = q
+    world.data.qvel[robot.controller.dof_adr] = 0.0
+    mujoco.mj_forward(world.model, world.data)
+    robot.controller.target = robot.controller.q()
+    robot.controller.command(robot.controller.target, grip=float(np.mean(q[robot.controller.n_body:])))
+    return robot
+
+
+def _relative_position(world: World, name: str) -> np.ndarray:
+    """The object's position in the grip-site frame, m, shape (3,)."""
+    grip = world.data.site("robot/grip")
+    return grip.xmat.reshape(3, 3).T @ (world.object_pose(name)[0] - grip.xpos)
+
+
+def run_trial(world: World, cls: str, name: str, rng: np.random.Generator) -> TrialResult:
+    """Set the scene up (see the module doc), pick `name` of class `cls`, hold it HOLD_SECONDS, measure."""
+    from homer_sim.errors import HomerError
+
+    started = time.perf_counter()
+    world.reset_settled()
+    _open_holder(world, name)
+    _jitter_pose(world, name, rng)
+    try:
+        robot = _robot_in_front(world, name, rng)
+    except HomerError as error:
+        return TrialResult(cls, False, f"set-up: {error}", 0.0, math.nan, time.perf_counter() - started)
+    world.settle(max_seconds=2.0)
+    robot.observer.observe_all()
+    start_z = float(world.object_pose(name)[0][2])
+    parent = world.layout.objects[world.object_index(name)].parent
+    picked = robot.pick(name, parent if parent in robot.navigator.furniture else None)
+    lift = float(world.object_pose(name)[0][2]) - start_z
+
+    def result(success: bool, reason: str, slip: float = math.nan) -> TrialResult:
+        return TrialResult(cls, success, reason, lift, slip, time.perf_counter() - started)
+
+    if not picked.success:
+        return result(False, picked.reason)
+    held_at = _relative_position(world, name)
+    world.step(int(round(HOLD_SECONDS / world.model.opt.timestep)))
+    slip = float(np.linalg.norm(_relative_position(world, name) - held_at))
+    lift = min(lift, float(world.object_pose(name)[0][2]) - start_z)
+    if world.warnings() or world.has_nan():
+        return result(False, f"{world.warnings()} MuJoCo warnings, NaN {world.has_nan()}", slip)
+    if lift < MIN_LIFT:
+        return result(False, f"lifted {lift * 100:.1f} cm, below {MIN_LIFT * 100:.0f} cm", slip)
+    if slip > MAX_SLIP:
+        return result(False, f"slipped {slip * 1000:.1f} mm in {HOLD_SECONDS:.0f} s", slip)
+    return result(True, "", slip)
+
+
+# --- the suite ------------------------------------------------------------------------------------------
+def run_suite(quick: bool = False, trials: int | None = None, seed: int = 0, progress: bool = True,
+              classes: dict[str, str] | None = None) -> dict:
+    """Run `trials` picks of every included class (or of the quick subset, or of `classes`: {class:
+    instance}) and summarise them as the `grasp-suite` JSON object. Each trial's random stream is seeded from
+    (seed, class name, trial number), so a class's trials do not depend on which other classes run."""
+    from tqdm import tqdm
+
+    from homer_sim.world import World
+    from planners.robot import add_robot
+
+    included, excluded = suite_classes()
+    chosen = classes if classes is not None else (quick_subset(included) if quick else included)
+    trials = trials if trials is not None else (QUICK_TRIALS if quick else DEFAULT_TRIALS)
+    world = World(extras=[add_robot])
+    started = time.perf_counter()
+    runs = [(cls, name, k) for cls, name in chosen.items() for k in range(trials)]
+    results: list[TrialResult] = []
+    for cls, name, k in tqdm(runs, desc="grasp suite", unit="trial", disable=not progress, file=sys.stderr):
+        rng = np.random.default_rng([seed, _stable_hash(cls), k])
+        outcome = run_trial(world, cls, name, rng)
+        log.info("%s trial %d: %s %s (lift %.3f m, slip %.4f m, %.1f s)", cls, k,
+                 "ok" if outcome.success else "FAILED", outcome.reason, outcome.lift_m, outcome.slip_m,
+                 outcome.wall_s)
+        results.append(outcome)
+    return summarise(results, excluded, len(included) + len(excluded), time.perf_counter() - started,
+                     {"quick": quick, "seed": seed, "trials_per_class": trials})
+
+
+def _stable_hash(text: str) -> int:
+    """A process-independent non-negative integer from a string (Python's hash() is salted per process)."""
+    return int.from_bytes(text.encode()[:16].ljust(16, b"\0"), "little") % (2**63)
+
+
+def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: int, wall_s: float,
+              extra: dict) -> dict:
+    """The `grasp-suite` JSON object from trial results (see the module doc of `homer_sim.cli` for the keys
+    scripts rely on); failure reasons per class and timing are extra keys."""
+    per_class: dict[str, dict] = {}
+    for r in results:
+        entry = per_class.setdefault(r.cls, {"trials": 0, "successes": 0, "failures": [],
+                                             "family": CATALOG[r.cls].family})
+        entry["trials"] += 1
+        entry["successes"] += int(r.success)
+        if not r.success:
+            entry["failures"].append(r.reason)
+        else:  # the measured margins of the successful trials
+            entry["min_lift_m"] = round(min(entry.get("min_lift_m", np.inf), r.lift_m), 4)
+            entry["max_slip_m"] = round(max(entry.get("max_slip_m", 0.0), r.slip_m), 5)
+    successes = sum(r.success for r in results)
+    rates = [e["successes"] / e["trials"] for e in per_class.values()]
+    return {
+        "trials": len(results),
+        "overall": successes / len(results) if results else 0.0,
+        "per_class": per_class,
+        "excluded": dict(excluded),
+        "classes": n_classes,
+        "excluded_fraction": len(excluded) / max(n_classes, 1),
+        "worst_class_rate": min(rates) if rates else 0.0,
+        "meets_targets": bool(results) and successes / len(results) >= TARGET_OVERALL
+        and min(rates) >= TARGET_CLASS,
+        "median_trial_wall_s": float(np.median([r.wall_s for r in results])) if results else 0.0,
+        "wall_s": wall_s,
+        **extra,
+    }
+
+
+# --- command line ---------------------------------------------------------------------------------------
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the `grasp-suite` subcommand to the `homer` parser's subparsers."""
+    suite = subparsers.add_parser(
+        "grasp-suite", help="pick every graspable object class from randomised start poses",
+        description=f"Pick each robot-graspable object class of the apartment from randomised start poses on "
+        f"its home surface or shelf; success: lifted {MIN_LIFT * 100:.0f} cm and held {HOLD_SECONDS:.0f} s with "
+        f"slip under {MAX_SLIP * 1000:.0f} mm. Exit status 1 when the overall rate is below {TARGET_OVERALL} or a "
+        f"class is below {TARGET_CLASS}.")
+    suite.add_argument("--quick", action="store_true", help="one class of each shape family (fast subset)")
+    suite.add_argument("--trials", type=_positive_int, default=None,
+                       help=f"trials per class ({DEFAULT_TRIALS}; {QUICK_TRIALS} with --quick)")
+    suite.add_argument("--seed", type=int, default=0, help="seed of the start-pose randomisation (0)")
+    suite.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
+    suite.add_argument("--json", action="store_true", help="print one JSON object")
+    suite.set_defaults(func=cmd_grasp_suite)
+
+
+def _positive_int(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
+    return value
+
+
+def cmd_grasp_suite(args: argparse.Namespace) -> int:
+    result = run_suite(quick=args.quick, trials=args.trials, seed=args.seed, progress=not args.quiet)
+    if args.json:
+        print(json.dumps(result))
+    else:
+        print(format_table(result))
+    return 0 if result["meets_targets"] else 1
+
+
+def format_table(result: dict) -> str:
+    """The suite result as a plain-text table: per class, then excluded classes, then the overall rate."""
+    lines = [f"{'class':<20} {'family':<9} {'ok':>5}"]
+    for cls, e in result["per_class"].items():
+        lines.append(f"{cls:<20} {e['family']:<9} {e['successes']:>2}/{e['trials']:<2}"
+                     + (f"  {e['failures'][0]}" if e["failures"] else ""))
+    lines += [f"excluded {cls}: {reason}" for cls, reason in result["excluded"].items()]
+    lines.append(f"overall {result['overall']:.1%} of {result['trials']} trials; "
+                 f"excluded {len(result['excluded'])} of {result['classes']} classes")
+    return "\n".join(lines)

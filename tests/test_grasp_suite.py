@@ -1,0 +1,68 @@
+"""The grasp regression suite: the quick subset in the default pass, the full suite behind the `slow` marker."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from homer_sim.catalog import CATALOG
+from planners.grasp_suite import (
+    MAX_SLIP,
+    MIN_LIFT,
+    TARGET_CLASS,
+    TARGET_OVERALL,
+    TrialResult,
+    quick_subset,
+    run_suite,
+    suite_classes,
+    summarise,
+)
+from planners.grasps import ungraspable_reason
+
+
+def test_suite_lists_every_apartment_class_once_with_reasons_for_exclusions() -> None:
+    included, excluded = suite_classes()
+    assert not set(included) & set(excluded)
+    assert len(included) + len(excluded) == 87
+    for cls, reason in excluded.items():
+        assert reason == ungraspable_reason(CATALOG[cls]) and reason
+    quick = quick_subset(included)
+    families = {CATALOG[c].family for c in included}
+    assert sorted(CATALOG[c].family for c in quick) == sorted(families)  # one class per family
+
+
+def test_summary_counts_trials_and_rates() -> None:
+    results = [TrialResult("bowl", True, "", 0.15, 0.001, 1.0), TrialResult("bowl", False, "missed", 0.0,
+                                                                             np.nan, 1.0),
+               TrialResult("mug", True, "", 0.14, 0.0, 1.0)]
+    summary = summarise(results, {"plate": "wide"}, 3, 3.0, {})
+    assert summary["trials"] == 3 and summary["overall"] == pytest.approx(2 / 3)
+    assert summary["per_class"]["bowl"] == {"trials": 2, "successes": 1, "failures": ["missed"], "family": "bowl",
+                                            "min_lift_m": 0.15, "max_slip_m": 0.001}
+    assert summary["worst_class_rate"] == 0.5 and not summary["meets_targets"]
+
+
+QUICK_MIN_OVERALL = 0.2  # regression floor: the quick subset's rate measured when the suite was written (the
+# cabinet-shelf classes still fail; the targets are asserted by the slow full-suite test)
+
+
+def test_quick_subset_lifts_and_holds() -> None:
+    result = run_suite(quick=True, seed=0, progress=False)
+    assert result["trials"] == len(result["per_class"]) >= 8
+    assert 0.0 <= result["overall"] <= 1.0
+    assert result["overall"] >= QUICK_MIN_OVERALL, result["per_class"]
+    for cls, entry in result["per_class"].items():
+        assert len(entry["failures"]) == entry["trials"] - entry["successes"]
+        assert all(entry["failures"]), cls  # every failure says why
+        if entry["successes"]:
+            assert entry["min_lift_m"] >= MIN_LIFT and entry["max_slip_m"] < MAX_SLIP, (cls, entry)
+    assert result["per_class"]["trashcan"]["successes"] == 1  # a rim pinch of a bin on the floor
+
+
+@pytest.mark.slow
+def test_full_grasp_suite_meets_its_targets() -> None:
+    result = run_suite(seed=0, progress=False)
+    rates = {c: e["successes"] / e["trials"] for c, e in result["per_class"].items()}
+    assert result["overall"] >= TARGET_OVERALL, rates
+    assert min(rates.values()) >= TARGET_CLASS, rates
+    assert len(result["excluded"]) <= result["classes"] / 5, result["excluded"]
