@@ -245,6 +245,8 @@ def build_parser() -> argparse.ArgumentParser:
     register_model(commands)
     from planners.grasp_suite import register as register_grasp_suite
     register_grasp_suite(commands)
+    from scenarios.cli import register as register_scenarios  # demo, run (scenario code is imported when they run)
+    register_scenarios(commands)
     return parser
 
 

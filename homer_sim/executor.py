@@ -212,9 +212,14 @@ class Executor(Handling):
             self.minute = minute
             self._perform(script.activity, action)
 
-    def run_day(self, entries, scripts: Mapping, rng: np.random.Generator) -> DayLog:
+    def run_day(self, entries, scripts: Mapping, rng: np.random.Generator,
+                after_tick: Callable[[int], float] | None = None, end_min: float | None = None) -> DayLog:
         """Live one day: `entries` are (activity, start_min, end_min) in time order, `scripts` maps each
-        activity to the script this household uses. Snapshots every TICK_MIN routine minutes."""
+        activity to the script this household uses. Snapshots every TICK_MIN routine minutes.
+
+        after_tick: called after each snapshot with its grid minute (a robot acting, for instance); returns the
+        routine minute its work ends, and actions due before then wait until then. end_min: stop after the
+        snapshot at this minute (default: the whole day)."""
         self.start_day(rng)
         events = []
         for activity, start, end in entries:
@@ -224,16 +229,20 @@ class Executor(Handling):
         grid = range(DAY_START_MIN, int(math.ceil(last / TICK_MIN)) * TICK_MIN + 1, TICK_MIN)
         pending = iter(events)
         event = next(pending, None)
-        current = None
+        current, free_at = None, -math.inf
         for minute in grid:
+            if end_min is not None and minute > end_min:
+                break
             while event is not None and event[0] < minute:
-                self.minute = event[0]
+                self.minute = max(event[0], free_at)
                 if event[1] != current and self.recording is not None:
                     self.recording.log_event(f"{event[1]} starts", routine_minute=event[0])
                 current = event[1]
                 self._perform(event[1], event[2])
                 event = next(pending, None)
             self.tick(minute)
+            if after_tick is not None:
+                free_at = after_tick(minute)
         return self.log
 
 

@@ -1,0 +1,56 @@
+"""Named headless runs: `homer run NAME --rrd PATH` looks them up here.
+
+Each scenario is a function (rrd path or None) -> result dict (JSON-ready) plus a function that formats the
+result for people. Scenarios import their heavy dependencies when they run.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from homer_sim.errors import unknown_name
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A named run: `run(rrd)` returns a result dict; `summary(result)` gives printable lines."""
+
+    name: str
+    help: str
+    run: Callable[[Path | None], dict]
+    summary: Callable[[dict], list[str]]
+
+
+def _breakfast(rrd: Path | None) -> dict:
+    from scenarios.breakfast import run_breakfast
+
+    return run_breakfast(rrd)
+
+
+def _breakfast_skipped(rrd: Path | None) -> dict:
+    from scenarios.breakfast import Morning, run_breakfast
+
+    return run_breakfast(rrd, Morning(skip_breakfast=True))
+
+
+def _summary(result: dict) -> list[str]:
+    from scenarios.breakfast import format_summary
+
+    return format_summary(result)
+
+
+SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
+    Scenario("breakfast", "a morning of the breakfast household with the robot setting and clearing the table",
+             _breakfast, _summary),
+    Scenario("breakfast_skipped", "the same morning, but the person skips breakfast: the robot's help is put back "
+             "once breakfast time has passed", _breakfast_skipped, _summary),
+)}
+
+
+def get(name: str) -> Scenario:
+    """The scenario called `name`; the error lists the known ones."""
+    if name not in SCENARIOS:
+        raise unknown_name("scenario", name, SCENARIOS, limit=len(SCENARIOS))
+    return SCENARIOS[name]
