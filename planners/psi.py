@@ -203,13 +203,14 @@ def plan_relocations(graph: SceneGraph, movable: np.ndarray, relocations: Sequen
 def psi(graph: SceneGraph, movable: np.ndarray, rollout: Rollout, *, threshold: float, window_steps: int,
         containers: Mapping[str, Sequence[str]], carried: Collection[str] = (),
         excluded: Callable[[str], str | None] = lambda obj: None, holds: Holds | None = None,
-        already_open: Collection[str] = ()) -> Plan:
+        already_open: Collection[str] = (), in_use: Collection[str] = ()) -> Plan:
     """The robot's plan for one query: relocations from `graph` (observed at t) to the rollout's first predicted
     destinations within `window_steps` grid steps, gated by `threshold`, ordered by `plan_relocations`.
 
     carried: objects in the person's hand. excluded: object name -> why the robot cannot grasp it (None if it can).
-    holds: objects the robot placed and keeps for the person. Moves that do not reach the threshold are reported
-    among the skipped ones.
+    holds: objects the robot placed and keeps for the person. in_use: furniture the person is at now; nothing is
+    taken from it or put on it while they are there (the robot does not clear a table the person eats at). Moves
+    that do not reach the threshold are reported among the skipped ones.
     """
     passed, below = predicted_relocations(graph, movable, rollout, threshold, window_steps)
 
@@ -217,7 +218,8 @@ def psi(graph: SceneGraph, movable: np.ndarray, rollout: Rollout, *, threshold: 
         if r.obj in carried:
             return "in the person's hand"
         held = holds.reason(r.obj) if holds is not None else None
-        return held or excluded(r.obj)
+        busy = [n for n in (anchor_of(graph, movable, r.source), r.destination) if n in in_use]
+        return held or (f"the person is at {busy[0]}" if busy else None) or excluded(r.obj)
 
     plan = plan_relocations(graph, movable, passed, containers, skip, already_open)
     low = tuple((r, f"confidence {r.confidence:.2f} below the threshold {threshold:.2f}") for r in below)

@@ -31,6 +31,7 @@ from planners.skills import Robot, SkillResult
 log = logging.getLogger(__name__)
 
 RECORD_PERIOD_S = 0.2  # physics seconds between pose rows while the robot acts (5 Hz keeps a morning small)
+PERSON_REACH = 0.7  # m from a furniture's footprint within which the person counts as using it
 FALLBACK_PLACES = 3  # places tried to put an object down after a failed place
 ROBOT_MIN_THRESHOLD = 0.5  # the robot acts on a move only when it is more likely than staying: robot time costs
 # routine minutes and a wrong move is worse than a missed one (the tuned threshold may be lower)
@@ -129,7 +130,7 @@ class Assistant:
         open_now = {f for f, parts in self.containers.items() if any(self.world.openness(p) > 0.1 for p in parts)}
         plan = psi(graph, self.predictor.movable, rollout, threshold=self.threshold, window_steps=self.window_steps,
                    containers=self.containers, carried=carried, excluded=lambda obj: self._excluded(obj, minute),
-                   holds=self.holds, already_open=open_now)
+                   holds=self.holds, already_open=open_now, in_use=self._person_at())
         if not plan.relocations:
             return float(minute)
         self.log.plans.append((minute, plan))
@@ -230,6 +231,19 @@ class Assistant:
             self.robot.navigator.drive_to(DEFAULT_POSE, self.robot.tuck)
         except NavigationError as error:
             log.warning("robot could not park: %s", error)
+
+    def _person_at(self) -> list[str]:
+        """Furniture whose footprint is within PERSON_REACH m of the person (what they may be using now)."""
+        x, y = self.executor.avatar.x, self.executor.avatar.y
+        near = []
+        for f in self.world.layout.furniture:
+            c, s = abs(np.cos(f.yaw)), abs(np.sin(f.yaw))
+            width, depth = f.size[0], f.size[1]  # local x is the depth (out of the front), local y the width
+            half_x, half_y = (c * depth + s * width) / 2, (s * depth + c * width) / 2
+            gap = np.hypot(max(abs(x - f.pos[0]) - half_x, 0.0), max(abs(y - f.pos[1]) - half_y, 0.0))
+            if gap < PERSON_REACH:
+                near.append(f.name)
+        return near
 
     def _robot_cells(self) -> np.ndarray:
         """Grid cells the person must not walk through: a disk around the robot's base."""

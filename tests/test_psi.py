@@ -131,3 +131,14 @@ def test_held_objects_stay_until_the_person_moves_them_or_the_window_passes() ->
     assert [h.obj for h in holds.update(in_sink, minute=470.0)] == ["bowl"]  # the person used it
     holds.add("cereal", "table", minute=460.0, until=490.0)
     assert [h.obj for h in holds.update(_graph(cereal="table"), 470.0, used={"cereal"})] == ["cereal"]
+
+
+def test_nothing_is_taken_from_or_put_on_furniture_the_person_is_at() -> None:
+    graph = _graph(bowl="table", cereal="table")
+    rollout = _rollout(graph, {"bowl": [("cupboard", 0.9)] * 3, "milk": [("table", 0.9)] * 3,
+                               "spoon": [("sink", 0.9)] * 3})
+    plan = _plan(graph, rollout, in_use=("table",))
+    assert [r.obj for r in plan.relocations] == ["spoon"]
+    reasons = {r.obj: why for r, why in plan.skipped}
+    assert reasons == {"bowl": "the person is at table", "milk": "the person is at table"}
+    assert {r.obj for r in _plan(graph, rollout).relocations} == {"bowl", "milk", "spoon"}

@@ -1,0 +1,81 @@
+"""The breakfast scenario end to end: dataset, predictor, the assisted morning, the reference, the recording.
+
+One morning is run once for the module (a fresh cache folder: the dataset is generated and the predictor trained
+as on a new machine); every check reads the observed scene graph of the assisted day, never the plan.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from homer_sim.recording import read_recording
+from scenarios.breakfast import MorningRun, breakfast_morning
+from scenarios.breakfast_data import DataSpec
+from scenarios.registry import SCENARIOS, get
+
+ITEMS = ("food_cereal", "milk", "bowl")
+TABLE = "table_dining_room"
+PUT_AWAY = {"food_cereal": {"cupboard"}, "milk": {"fridge"}, "bowl": {"sink_dining_room", "cupboard"}}
+
+
+@pytest.fixture(scope="module")
+def morning(tmp_path_factory: pytest.TempPathFactory) -> tuple[MorningRun, Path]:
+    folder = tmp_path_factory.mktemp("breakfast")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("HOMER_SIM_CACHE", str(folder / "cache"))
+        rrd = folder / "breakfast.rrd"
+        return breakfast_morning(rrd, spec=DataSpec(train_days=10, test_days=1)), rrd
+
+
+def _where(run: MorningRun, minute: int) -> dict[str, tuple[str, int]]:
+    """(parent, relation code) of each breakfast item in the assisted day's snapshot at `minute`."""
+    day = run.assist.day
+    t = day.minutes.index(minute)
+    index = {n: i for i, n in enumerate(run.nodes)}
+    return {o: (run.nodes[int(day.parents[t][index[o]])], int(day.relations[t][index[o]])) for o in ITEMS}
+
+
+def test_the_table_is_set_before_breakfast_and_cleared_after(morning: tuple[MorningRun, Path]) -> None:
+    run, _ = morning
+    assert run.assist.error == "", run.assist.error
+    (activity, start, end), = run.result["schedule"]
+    assert activity == "breakfast"
+    before = max(m for m in run.assist.day.minutes if m <= start)  # the last snapshot before the person reaches
+    failures = [f"{r['object']}: {r['reason']}" for r in run.result["relocations"] if not r["done"]]
+    on_table = _where(run, before)
+    assert all(p == (TABLE, 1) for p in on_table.values()), f"at {before} min: {on_table}; failures: {failures}"
+    last = run.assist.day.minutes[-1]
+    after = _where(run, last)
+    assert all(after[o][0] in PUT_AWAY[o] for o in ITEMS), f"at {last} min: {after}; failures: {failures}"
+
+
+def test_relocations_are_scored_against_the_unassisted_replay(morning: tuple[MorningRun, Path]) -> None:
+    run, _ = morning
+    result = run.result
+    assert result["relocations_planned"] >= result["relocations_done"] >= result["relocations_correct"]
+    assert result["relocations_done"] >= len(ITEMS)
+    # Without the robot the person takes the items out themselves: the reference shows them moving to the table.
+    reference = np.asarray(run.reference.parents)
+    index = {n: i for i, n in enumerate(run.nodes)}
+    for obj in ITEMS:
+        assert run.nodes.index(TABLE) in reference[:, index[obj]], obj
+
+
+def test_the_recording_holds_the_scene_the_graphs_and_the_robot(morning: tuple[MorningRun, Path]) -> None:
+    _, rrd = morning
+    assert rrd.is_file() and rrd.stat().st_size < 50e6
+    entities = read_recording(rrd)
+    for path in ("graph/observed", "graph/predicted", "events", "world/person/path"):
+        assert path in entities, sorted(entities)[:20]
+    assert any(e.startswith("world/bodies/robot/") for e in entities)
+    events = " ".join(str(v) for v in entities["events"].column("TextLog:text").to_pylist())
+    assert "robot pick" in events and "breakfast starts" in events
+
+
+def test_scenarios_are_registered_and_unknown_names_list_the_known_ones() -> None:
+    assert {"breakfast", "breakfast_skipped"} <= set(SCENARIOS)
+    with pytest.raises(KeyError, match="breakfast"):
+        get("brekfast")
