@@ -24,7 +24,7 @@ from scenarios.breakfast_data import HOUSEHOLD, DataSpec, check_meta, ensure_dat
 
 log = logging.getLogger(__name__)
 
-MORNING_END_MIN = 510  # 08:30: breakfast starts at 07:00 and is cleared away by about 07:45
+MORNING_END_MIN = 510  # 08:30: breakfast starts at 07:00 and is cleared away by about 07:50
 DEMO_DAY = ("test", 0)
 
 

@@ -1,6 +1,6 @@
 """The breakfast household, its small dataset and its trained predictor, made deterministically and cached.
 
-A household whose only activity is breakfast (the cereal script), every day at 07:00: a regular routine like the
+A household whose only activity is breakfast (BREAKFAST_SCRIPT), every day at 07:00: a regular routine like the
 paper's robot demo, where the length of breakfast (and so the time of clearing up) varies from day to day.
 `ensure_dataset` simulates its days with the project's generator (the same per-day random streams as
 `homer generate`, so the bytes depend only on the seed) into a user cache folder; `ensure_predictor`
@@ -43,12 +43,66 @@ class DataSpec:
     window_min: int = 30
 
 
-def breakfast_household() -> Household:
-    """Breakfast (script variant 0: cereal, milk and bowl at the table) and nothing else."""
+BREAKFAST_SCRIPT = """\
+# The paper's robot demo: cereal, milk and bowl at the table; after eating the person sits on the sofa for a
+# while, then returns cereal and milk and leaves bowl and spoon in the sink.
+## 2-3
+[Walk] <cupboard>
+[Open] <cupboard>
+[Grab] <bowl>
+[Grab] <food_cereal>
+[Walk] <table_dining_room>
+[PutBack] <bowl> <table_dining_room>
+[PutBack] <food_cereal> <table_dining_room>
+## 1-2
+[Walk] <cupboard>
+[Grab] <spoon>
+[Close] <cupboard>
+[Walk] <fridge>
+[Open] <fridge>
+[Grab] <milk>
+[Close] <fridge>
+[Walk] <table_dining_room>
+[PutBack] <spoon> <table_dining_room>
+[PutBack] <milk> <table_dining_room>
+## 10-16
+[Pour] <food_cereal> <bowl>
+[Pour] <milk> <bowl>
+[Eat] <bowl>
+[Eat] <bowl>
+## 12-20
+[Walk] <sofa_home_office>
+[Sit] <sofa_home_office>
+## 2-4
+[Walk] <table_dining_room>
+[Grab] <milk>
+[Walk] <fridge>
+[Open] <fridge>
+[PutIn] <milk> <fridge>
+[Close] <fridge>
+[Walk] <table_dining_room>
+[Grab] <food_cereal>
+[Walk] <cupboard>
+[Open] <cupboard>
+[PutIn] <food_cereal> <cupboard>
+[Close] <cupboard>
+[Walk] <table_dining_room>
+[Grab] <bowl>
+[Grab] <spoon>
+[Walk] <sink_dining_room>
+[PutIn] <bowl> <sink_dining_room>
+[PutIn] <spoon> <sink_dining_room>
+"""
+"""The demo household's breakfast: the person leaves the table for a while after eating, so there is time to
+clear it that is not mid-meal (with the packaged scripts the person clears up the moment they finish)."""
+
+
+def breakfast_household(variant: int = 0) -> Household:
+    """Breakfast (script `variant` of the library; `make_generator` adds BREAKFAST_SCRIPT) and nothing else."""
     habits = {a: (0.0,) * HOURS for a in ACTIVITIES}
     habits["breakfast"] = BREAKFAST_HABIT
-    return Household(HOUSEHOLD, "Only breakfast, at 07:00.", habits, {a: 0 for a in ACTIVITIES},
-                     OPTIONAL)
+    variants = {a: 0 for a in ACTIVITIES} | {"breakfast": variant}
+    return Household(HOUSEHOLD, "Only breakfast, at 07:00.", habits, variants, OPTIONAL)
 
 
 def cache_root() -> Path:
@@ -61,10 +115,15 @@ def cache_root() -> Path:
 
 def make_generator(recording=None):
     """The project's day generator with the breakfast household added to its households."""
+    from homer_sim.aliases import Resolver
     from homer_sim.generate import Generator, Sources
+    from homer_sim.scripts import parse_script
 
     generator = Generator(Sources(), recording=recording)
-    generator.households[HOUSEHOLD] = breakfast_household()
+    script = parse_script(BREAKFAST_SCRIPT, "scenarios/breakfast_data.py", "breakfast", "demo",
+                          Resolver(generator.world.layout.node_names()))
+    generator.library["breakfast"] = [*generator.library["breakfast"], script]
+    generator.households[HOUSEHOLD] = breakfast_household(len(generator.library["breakfast"]) - 1)
     return generator
 
 
