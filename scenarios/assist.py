@@ -186,7 +186,14 @@ class Assistant:
         if step.action == "open":
             return self.robot.open_articulation(step.target)
         if step.action == "close":
-            return None if step.node in failed_containers else self.robot.close_articulation(step.target)
+            if step.node in failed_containers:
+                return None
+            result = self.robot.close_articulation(step.target)
+            if not result.success:  # one more try: a door left open blocks the person
+                self._event(f"robot close {step.target} failed ({result.reason}); trying again", self.executor.minute,
+                            "WARN")
+                result = self.robot.close_articulation(step.target)
+            return result
         if step.action == "pick":
             blocked = [c for c in (step.node, by_obj[step.obj].destination) if c in failed_containers]
             if blocked:
