@@ -25,6 +25,13 @@ SIDE_DEPTH = 0.022  # m from an object's near face to the grip site: the palm (0
 PALM_SETBACK = 0.027  # m: the palm's front face lies 0.035 m behind the grip site; 8 mm to spare
 SIDE_MIN_OVERLAP = 0.015  # m of the object's depth between the pads
 GRIPPER_OPEN = 0.07  # m per finger, the gripper's stroke
+SHELF_PITCHES = (0.0, math.radians(30), math.radians(45), math.radians(60), math.radians(90))  # rad below the
+# horizontal of an in-furniture grasp's approach: 0 is the side grasp, 90 degrees straight down
+FINGER_HALF_THICKNESS = 0.016  # m: half the finger links' extent across the pads' plane
+TOP_DEPTH = 0.02  # m: a grasp from above holds this far below the object's top
+SHELF_APPROACH = 0.05  # m: the approach onto a grasp under a shelf
+PALM_LOW_EDGE = (0.035, 0.03)  # m: the palm's front-low edge lies this far behind the grip site and off its z
+PALM_MARGIN = 0.01  # m between the palm's low edge and an object's front face
 
 
 @dataclass(frozen=True)
@@ -35,6 +42,7 @@ class Grasp:
     rotation: np.ndarray
     pre_opening: float
     kind: str
+    approach: float = 0.12  # m the gripper travels along its x axis onto the grasp (short inside furniture)
 
     def quat(self) -> np.ndarray:
         """The rotation as a unit wxyz quaternion."""
@@ -133,6 +141,69 @@ def side_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwar
         return []
     centre = np.array([position[0], position[1], z]) + out * along
     return [Grasp(centre, rotation, min(GRIPPER_OPEN, width / 2 + SIDE_MARGIN), "side")]
+
+
+def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,
+                 front: float = np.inf) -> list[Grasp]:
+    """Grasps of an object on a shelf inside furniture, approached from its open front: the horizontal side
+    grasp (see `side_grasps`; with the palm inside the furniture where the front part alone is too shallow to
+    hold), then approaches pitched SHELF_PITCHES down into the compartment with the fingers
+    closing horizontally across the object near its top (short enough for the wrist to pass under the shelf
+    above; whether it does is for a collision check of the arm), then rim pinches of containers (only those
+    for wide ones).
+
+    outward: horizontal unit vector (shape (2,) or (3,)) out of the furniture's front; front: m from the
+    object's centre to the front plane along it. Best first; empty when no grasp fits the shape.
+    """
+    sx, sy, sz = cls.size
+    out = np.array([outward[0], outward[1], 0.0]) / np.linalg.norm(outward[:2])
+    across = np.array([-out[1], out[0], 0.0])
+    yaw = 2.0 * math.atan2(quat[3], quat[0])
+    body_x = np.array([math.cos(yaw), math.sin(yaw), 0.0])
+    body_y = np.array([-body_x[1], body_x[0], 0.0])
+    support, top = position[2] - sz / 2, position[2] + sz / 2
+    grasps = side_grasps(cls, position, quat, outward, front) or side_grasps(cls, position, quat, outward, -np.inf)
+    hollow = cavity(cls) if cls.family in ("bowl", "pot", "bin", "cup", "mug") else None
+    if hollow is not None and min(sx, sy) > MAX_WIDTH - 0.02:
+        return grasps + _tilted_rims(hollow, position, yaw, support, out)
+    rims = _tilted_rims(hollow, position, yaw, support, out) if hollow is not None else []
+    for pitch in SHELF_PITCHES[1:]:
+        x = math.cos(pitch) * -out + np.array([0.0, 0.0, -math.sin(pitch)])
+        # fingers across the object seen from the front; from straight above also along the approach
+        for y in (across, np.cross(across, x))[: 2 if pitch == SHELF_PITCHES[-1] else 1]:
+            width = abs(np.dot(y, body_x)) * sx + abs(np.dot(y, body_y)) * sy
+            if width > MAX_WIDTH:
+                continue
+            tip_drop = PAD_HALF * math.sin(pitch) + FINGER_HALF_THICKNESS * math.cos(pitch)
+            z = max(top - TOP_DEPTH, support + tip_drop + SUPPORT_CLEARANCE)
+            depth = abs(np.dot(out, body_x)) * sx + abs(np.dot(out, body_y)) * sy
+            edge = PALM_LOW_EDGE[0] * math.cos(pitch) + PALM_LOW_EDGE[1] * math.sin(pitch)  # out of the grip
+            shift = 0.0 if pitch == SHELF_PITCHES[-1] else max(0.0, depth / 2 + PALM_MARGIN - edge)
+            if shift > depth / 2 - SIDE_MIN_OVERLAP / 2:
+                continue  # the pads would hold only the front edge
+            centre = np.array([position[0], position[1], z]) + out * shift
+            grasps.append(Grasp(centre, np.column_stack([x, y, np.cross(x, y)]), min(GRIPPER_OPEN, width / 2 + 0.025),
+                                f"shelf-{math.degrees(pitch):.0f}", SHELF_APPROACH))
+    return grasps + rims
+
+
+def _tilted_rims(hollow, position: np.ndarray, yaw: float, support: float, out: np.ndarray) -> list[Grasp]:
+    """Pinches of a wide container's front rim from the compartment's front, pitched down SHELF_PITCHES (not
+    horizontal), the fingers closing across the wall along the outward direction."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    centre = position[:2] + np.array([c * hollow.center_xy[0] - s * hollow.center_xy[1],
+                                      s * hollow.center_xy[0] + c * hollow.center_xy[1]])
+    rim_z = position[2] + hollow.rim_z
+    across = np.array([-out[1], out[0], 0.0])
+    grasps = []
+    for pitch in SHELF_PITCHES[:0:-1]:
+        x = math.cos(pitch) * -out + np.array([0.0, 0.0, -math.sin(pitch)])
+        y = np.cross(across, x)  # in the vertical plane of the approach, pointing out of the compartment
+        xy = centre + out[:2] * (hollow.rim_radius + 0.004)
+        z = max(rim_z - 0.015, support + PAD_HALF + SUPPORT_CLEARANCE)
+        grasps.append(Grasp(np.array([xy[0], xy[1], z]), np.column_stack([x, y, np.cross(x, y)]), 0.03,
+                            f"rim-{math.degrees(pitch):.0f}", SHELF_APPROACH))
+    return grasps
 
 
 def _rim_grasps(hollow, position: np.ndarray, yaw: float, support: float, robot_xy: np.ndarray) -> list[Grasp]:

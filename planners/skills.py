@@ -18,11 +18,11 @@ from homer_sim.validate import ROBOT_RADIUS
 from planners.articulate import base_candidates
 from planners.control import Controller
 from planners.door_skills import ARC_BASE_COST, ClearanceCheck, PartMover
-from planners.grasps import Grasp, matrix_to_quat, side_grasps, top_grasps, ungraspable_reason
+from planners.grasps import Grasp, matrix_to_quat, shelf_grasps, top_grasps, ungraspable_reason
 from planners.ik import IKSolver
 from planners.navigation import CLEARANCE, NavigationError, Navigator
 
-APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to
+APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 LIFT = 0.15  # m
 HOLD_SECONDS = 0.5
 MIN_HELD_OPENING = 0.001  # m per finger: closed further means the fingers missed
@@ -36,6 +36,8 @@ RAISED_SHOULDER = -1.0  # rad: upper arm raised above the tuck
 SIDE_LIFT = 0.03  # m: a side grasp first lifts the object this much off its shelf,
 SIDE_PULL = 0.35  # m: then draws it this far out of the furniture,
 SIDE_RAISE = 0.09  # m: then raises it this much more
+ENTRY_OUT = 0.12  # m: a grasp inside furniture is entered from this far in front of its front plane
+ENTRY_STEP = 0.05  # m between checked configurations on the way in
 PULL_BASE_COST = 0.1  # IK damping on the base while drawing an object out: the base backs away
 
 
@@ -121,26 +123,48 @@ class Robot:
             posture = path[-1]
         self.navigator.drive_to(goal, posture)
 
-    def _go_to_grasp(self, grasp: Grasp) -> bool:
-        """Drive (arm tucked) to a free base pose from which `grasp` and its approach are reachable with the
-        arm clear of the apartment; False if there is none."""
+    def _go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float) -> list[np.ndarray] | None:
+        """Drive (arm tucked) to a free base pose from which the way into `grasp` is reachable with the arm
+        clear of the apartment: the grip `entry` m out along `pull` (a horizontal unit vector out of the
+        furniture, shape (3,)) from the approach point, in along a straight line, the approach, and SIDE_LIFT m
+        above the grasp. Returns the configurations (each shape (13,)) from the entry to the approach point, or
+        None (the robot stays) if no base pose works."""
         quat = grasp.quat()
-        above = grasp.position - APPROACH * grasp.rotation[:, 0]
+        above = grasp.position - grasp.approach * grasp.rotation[:, 0]
         obstacles = self.navigator.open_part_rects()
-        for base in base_candidates(grasp.position, grasp.rotation, None):
+        for base in base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2]):
             if not self.navigator.plan.disk_is_free(base[0], base[1], ROBOT_RADIUS + CLEARANCE, obstacles):
                 continue
             q = self.tuck.copy()
             q[:3] = base
-            pre = self.ik.solve(q, above, quat, base_cost=ARC_BASE_COST)
-            if not pre.converged or not self.clearance.clear(pre.q):
+            start = self.ik.solve(q, above + entry * pull, quat, base_cost=ARC_BASE_COST)
+            if not start.converged or not self.clearance.clear(start.q):
                 continue
-            at = self.ik.solve(pre.q, grasp.position, quat, base_cost=ARC_BASE_COST, seeds=False)
-            if at.converged and self.clearance.clear(at.q):
-                self.retract()
-                self.navigator.drive_to(base, self.tuck)
-                return True
-        return False
+            path = self._checked_line(start.q, [above + entry * pull, above], quat)
+            if path is None or self._checked_line(path[-1], [above, grasp.position, grasp.position + np.array(
+                    [0.0, 0.0, SIDE_LIFT])], quat) is None:
+                continue
+            self.retract()
+            self.navigator.drive_to(base, self.tuck)
+            path_in = [start.q, *path]
+            for q_in in path_in:
+                q_in[:3] = self.controller.target[:3]  # where the base really stopped
+            return path_in
+        return None
+
+    def _checked_line(self, q: np.ndarray, points: list[np.ndarray], quat: np.ndarray) -> list[np.ndarray] | None:
+        """IK configurations (base held, each shape (13,)) from q through grip-site points (m, each shape (3,)),
+        ENTRY_STEP m apart on the straight lines between them; None if one is unreachable or touches anything."""
+        path = []
+        for a, b in zip(points[:-1], points[1:], strict=False):
+            steps = max(1, int(np.ceil(np.linalg.norm(b - a) / ENTRY_STEP)))
+            for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
+                result = self.ik.solve(q, a + s * (b - a), quat, base_cost=ARC_BASE_COST, seeds=False)
+                if not result.converged or not self.clearance.clear(result.q):
+                    return None
+                q = result.q
+                path.append(q)
+        return path
 
     def _carry_path(self) -> list[np.ndarray]:
         """Configurations (each shape (13,)) along a straight grip-site line from where the hand is to the carry
@@ -173,24 +197,18 @@ class Robot:
         position, quat = self.world.object_pose(name)
         furniture = self.navigator.furniture.get(node)
         inside = graph.relation_of(name) == RELATION_NAMES[INSIDE] and furniture is not None
+        if inside and furniture.kind == "cabinet":  # on a shelf: from the front, the base placed for each grasp
+            return self._pick_from_shelf(name, node, cls, position, quat)
         try:
-            if inside and furniture.kind == "cabinet":  # on a shelf: from the front, the base placed for it
-                out = self.navigator.front_normal(node)
-                front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
-                grasps = side_grasps(cls, position, quat, out, front)
-                if not grasps or not self._go_to_grasp(grasps[0]):
-                    return SkillResult(False, f"{name}: no free base pose from which a side grasp in {node} is "
-                                              "reachable without touching it")
-            elif furniture is None:  # on the floor of a room
+            if furniture is None:  # on the floor of a room
                 goal = self.navigator.stand_near(tuple(position[:2]))
                 self.retract()
                 self.navigator.drive_to(goal, self.tuck)
-                grasps = top_grasps(cls, position, quat, self.controller.q()[:2])
             else:
                 self.go_to(node, position[:2])
-                grasps = top_grasps(cls, position, quat, self.controller.q()[:2])
         except NavigationError as error:
             return SkillResult(False, f"{name}: {error}")
+        grasps = top_grasps(cls, position, quat, self.controller.q()[:2])
         failures = []
         for grasp in grasps:
             outcome = self._try_grasp(name, grasp)
@@ -200,15 +218,53 @@ class Robot:
             failures.append(f"{grasp.kind}: {outcome.reason}")
         return SkillResult(False, f"{name}: every grasp failed ({'; '.join(failures)})")
 
-    def _try_grasp(self, name: str, grasp: Grasp) -> SkillResult:
-        """Approach against the grip x axis (from above, or from the front for side grasps), close, lift."""
+    def _pick_from_shelf(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray) -> SkillResult:
+        """Pick `name` from a shelf inside cabinet `node`: each grasp of `shelf_grasps` in turn, from a base
+        pose where the arm clears the compartment; the object lifted SIDE_LIFT m, drawn out, then raised."""
+        furniture = self.navigator.furniture[node]
+        out = self.navigator.front_normal(node)
+        front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
+        grasps = shelf_grasps(cls, position, quat, out, front)
+        if not grasps:
+            return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
+        unreachable, failures = [], []
+        for grasp in grasps:
+            pull = np.array([out[0], out[1], 0.0])
+            try:
+                path_in = self._go_to_grasp(grasp, pull, max(front, 0.0) + ENTRY_OUT)
+            except NavigationError as error:
+                failures.append(f"{grasp.kind}: {error}")
+                continue
+            if path_in is None:
+                unreachable.append(grasp.kind)
+                continue
+            outcome = self._try_grasp(name, grasp, pull=pull, path_in=path_in)
+            if outcome.success:
+                self.held = name
+                return outcome
+            failures.append(f"{grasp.kind}: {outcome.reason}")
+        if unreachable:
+            failures.append(f"{', '.join(unreachable)}: no free base pose reaches the grasp without the arm "
+                            f"touching {node} or its contents")
+        return SkillResult(False, f"{name}: every grasp in {node} failed ({'; '.join(failures)})")
+
+    def _try_grasp(self, name: str, grasp: Grasp, pull: np.ndarray | None = None,
+                   path_in: list[np.ndarray] | None = None) -> SkillResult:
+        """Approach along the grip x axis, close, lift: straight up LIFT m, or with `pull` (a horizontal unit
+        vector out of the furniture, shape (3,)) up SIDE_LIFT m, out SIDE_PULL m and up SIDE_RAISE m.
+        path_in: configurations (each shape (13,)) ending at the approach point, already checked; when None the
+        approach configuration is solved here."""
         quat = grasp.quat()
         back = -grasp.rotation[:, 0]  # from the grasp towards where the gripper comes from
-        above = grasp.position + APPROACH * back
-        pre = self._ik(above, quat)
-        if not pre.converged:
-            return SkillResult(False, f"approach pose {pre.reason}")
-        self.reach(pre.q, grip=grasp.pre_opening)
+        above = grasp.position + grasp.approach * back
+        if path_in is None:
+            pre = self._ik(above, quat)
+            if not pre.converged:
+                return SkillResult(False, f"approach pose {pre.reason}")
+            path_in = [pre.q]
+        self.reach(path_in[0], grip=grasp.pre_opening)
+        if len(path_in) > 1:
+            self.controller.move_through(path_in[1:], grip=grasp.pre_opening)
         self.controller.settle(0.003)
         down = self._line(above, grasp.position, quat)
         if down is None:
@@ -221,8 +277,8 @@ class Robot:
             self._back_off(above, quat)
             return SkillResult(False, f"fingers closed on nothing (opening {opening * 1000:.1f} mm)")
         up = np.array([0.0, 0.0, 1.0])
-        if grasp.kind == "side":
-            legs = [SIDE_LIFT * up, SIDE_PULL * np.array([back[0], back[1], 0.0]), SIDE_RAISE * up]
+        if pull is not None:
+            legs = [SIDE_LIFT * up, SIDE_PULL * pull, SIDE_RAISE * up]
         else:
             legs = [LIFT * up]
         point = grasp.position

@@ -42,7 +42,7 @@ def test_summary_counts_trials_and_rates() -> None:
     assert summary["worst_class_rate"] == 0.5 and not summary["meets_targets"]
 
 
-QUICK_MIN_OVERALL = 0.18  # regression floor: 2 of 11, the quick subset measured when the suite was written (the
+QUICK_MIN_OVERALL = 0.36  # regression floor: 4 of 11 measured with pitched and rim grasps inside cabinets (the
 # cabinet-shelf classes still fail; the targets are asserted by the slow full-suite test)
 
 
