@@ -5,7 +5,6 @@ Each benchmark prints exactly one JSON object on stdout; everything else goes to
 
 from __future__ import annotations
 
-import argparse
 import json
 import logging
 import os
@@ -18,22 +17,13 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from homer_sim.cli import positive_int  # noqa: E402, F401 (the one argparse type; re-exported)
+
 log = logging.getLogger("benchmarks")
 
 
 def setup_logging() -> None:
     logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(asctime)s %(name)s: %(message)s")
-
-
-def positive_int(text: str) -> int:
-    """argparse type: an integer >= 1, with a message naming the bad value."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
-    return value
 
 
 def pin_to_one_core() -> int | None:

@@ -28,6 +28,7 @@ import numpy as np
 
 from homer_sim.apartment import default_layout
 from homer_sim.catalog import CATALOG, FAMILIES
+from homer_sim.cli import positive_int
 from homer_sim.graph import INSIDE
 
 if TYPE_CHECKING:
@@ -299,23 +300,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         f"slip under {MAX_SLIP * 1000:.0f} mm. Exit status 1 when the overall rate is below {TARGET_OVERALL} or a "
         f"class is below {TARGET_CLASS}.")
     suite.add_argument("--quick", action="store_true", help="one class of each shape family (fast subset)")
-    suite.add_argument("--trials", type=_positive_int, default=None,
+    suite.add_argument("--trials", type=positive_int, default=None,
                        help=f"trials per class ({DEFAULT_TRIALS}; {QUICK_TRIALS} with --quick)")
     suite.add_argument("--seed", type=int, default=0, help="seed of the start-pose randomisation (0)")
     suite.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
     suite.add_argument("--json", action="store_true", help="print one JSON object")
     suite.set_defaults(func=cmd_grasp_suite)
-
-
-def _positive_int(text: str) -> int:
-    """argparse type: an integer >= 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
-    return value
 
 
 def cmd_grasp_suite(args: argparse.Namespace) -> int:
