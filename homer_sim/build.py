@@ -1,11 +1,17 @@
 """Compile a declarative Layout to a MuJoCo model with MjSpec.
 
 Naming (the one place MJCF names are made; `homer_sim.names` parses them back):
-- a room's floor: body `<room>`, geom `<room>/floor`; walls: world geoms `wall/<wall>/<k>`;
-- furniture: body `<furniture>` with geoms `<furniture>/<box>`; a door or drawer: body and joint
-  `<furniture>/<part>`, its handle geom and site `<furniture>/<part>/handle`;
-- interior volumes: sites `<furniture>/interior_<k>` on the body that carries them;
+- a room's floor: world geom `<room>/floor`; walls: world geoms `wall/<k>`;
+- furniture with doors or drawers: body `<furniture>` with geoms `<furniture>/<box>`; a door or drawer: body
+  and joint `<furniture>/<part>`, its handle geom and site `<furniture>/<part>/handle`;
+- furniture without parts: world geoms `<furniture>/<box>`, posed in the world frame;
+- interior volumes: sites `<furniture>/interior_<k>` on the body that carries them (the world body for
+  furniture without parts);
 - objects: body `<object>` with a free joint `<object>` and geoms `<object>/<part>`.
+
+What never moves lives on the world body: MuJoCo's broadphase cost grows with the number of bodies, even
+when they all sleep, so a static body per floor and per table would cost every step. A geom's owner is the
+name before its first '/' (see `homer_sim.observe`).
 """
 
 from __future__ import annotations
@@ -30,6 +36,9 @@ FLOOR_RGBA = {"outside": (0.45, 0.55, 0.4, 1.0)}
 FURNITURE_FRICTION = (0.9, 0.005, 0.0001)
 CONTACT_SOLREF = (0.005, 1.0)  # stiff enough that a dropped object cannot sink through a 2 cm board
 FREE_DAMPING = 0.002  # N s/m and N m s/rad on free objects: damps the chatter of thin objects, negligible in flight
+IDENTITY_QUAT = (1.0, 0.0, 0.0, 0.0)
+
+Pose = tuple[np.ndarray, np.ndarray]  # position m (3,) and wxyz quaternion (4,) of a frame in its parent body
 
 
 def _configure(spec: mujoco.MjSpec) -> None:
@@ -46,8 +55,22 @@ def _configure(spec: mujoco.MjSpec) -> None:
     spec.visual.global_.offheight = 960
 
 
-def _add_box(body: mujoco.MjsBody, name: str, box: Box, density: float | None = None) -> mujoco.MjsGeom:
-    geom = body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, pos=box.center, size=box.half, rgba=box.rgba)
+def _in_body(frame: Pose | None, local: tuple[float, float, float] | np.ndarray) -> Pose:
+    """Pose in the body of an unrotated element at `local` in `frame` (None: the body's own frame).
+
+    Composed here rather than with an `MjsFrame`: `MjSpec.to_xml` prints an unnamed frame's pose at 6
+    significant digits, and the export must reload bit-identical (see `homer_sim.export`)."""
+    if frame is None:
+        return np.array(local, dtype=np.float64), np.array(IDENTITY_QUAT)
+    offset = np.zeros(3)
+    mujoco.mju_rotVecQuat(offset, np.array(local, dtype=np.float64), frame[1])
+    return frame[0] + offset, frame[1]
+
+
+def _add_box(body: mujoco.MjsBody, name: str, box: Box, density: float | None = None,
+             frame: Pose | None = None) -> mujoco.MjsGeom:
+    pos, quat = _in_body(frame, box.center)
+    geom = body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, pos=pos, quat=quat, size=box.half, rgba=box.rgba)
     geom.friction = FURNITURE_FRICTION
     geom.solref = CONTACT_SOLREF
     if density is not None:
@@ -58,10 +81,10 @@ def _add_box(body: mujoco.MjsBody, name: str, box: Box, density: float | None = 
 def _add_floors_and_walls(spec: mujoco.MjSpec, layout: Layout) -> None:
     for room in layout.rooms:
         x0, y0, x1, y1 = room.rect
-        body = spec.worldbody.add_body(name=room.name)
-        geom = body.add_geom(name=f"{room.name}/floor", type=mujoco.mjtGeom.mjGEOM_BOX,
-                             pos=((x0 + x1) / 2, (y0 + y1) / 2, -0.025), size=((x1 - x0) / 2, (y1 - y0) / 2, 0.025),
-                             rgba=FLOOR_RGBA.get(room.name, (0.72, 0.62, 0.5, 1.0)))
+        geom = spec.worldbody.add_geom(name=f"{room.name}/floor", type=mujoco.mjtGeom.mjGEOM_BOX,
+                                       pos=((x0 + x1) / 2, (y0 + y1) / 2, -0.025),
+                                       size=((x1 - x0) / 2, (y1 - y0) / 2, 0.025),
+                                       rgba=FLOOR_RGBA.get(room.name, (0.72, 0.62, 0.5, 1.0)))
         geom.group = FLOOR_GROUP
         geom.friction = FURNITURE_FRICTION
         geom.solref = CONTACT_SOLREF
@@ -94,17 +117,21 @@ def _add_part(spec: mujoco.MjSpec, body: mujoco.MjsBody, f: Furniture, part: Par
 
 def _add_furniture(spec: mujoco.MjSpec, layout: Layout, f: Furniture) -> None:
     geometry = furniture_geometry(f)
-    body = spec.worldbody.add_body(name=f.name, pos=(f.pos[0], f.pos[1], base_height(layout, f)),
-                                   quat=yaw_quat(f.yaw))
+    pose = (np.array([f.pos[0], f.pos[1], base_height(layout, f)]), np.array(yaw_quat(f.yaw)))
+    if geometry.parts:  # parts need a body to hang from and to exclude contacts with
+        body, frame = spec.worldbody.add_body(name=f.name, pos=pose[0], quat=pose[1]), None
+    else:  # fused into the world body
+        body, frame = spec.worldbody, pose
     for box in geometry.boxes:
-        _add_box(body, f"{f.name}/{box.name}", box)
+        _add_box(body, f"{f.name}/{box.name}", box, frame=frame)
     parts = {part.name: _add_part(spec, body, f, part) for part in geometry.parts}
     for k, volume in enumerate(geometry.volumes):
         holder, center = body, np.array(volume.center)
-        if volume.part is not None:
+        if volume.part is not None:  # furniture with parts has a body: frame is None
             part = next(p for p in geometry.parts if p.name == volume.part)
             holder, center = parts[volume.part], center - np.array(part.anchor)
-        holder.add_site(name=f"{f.name}/interior_{k}", type=mujoco.mjtGeom.mjGEOM_BOX, pos=center,
+        pos, quat = _in_body(frame, center)
+        holder.add_site(name=f"{f.name}/interior_{k}", type=mujoco.mjtGeom.mjGEOM_BOX, pos=pos, quat=quat,
                         size=volume.half, rgba=(0.2, 0.6, 1.0, 0.0), group=VOLUME_GROUP)
 
 

@@ -1,9 +1,11 @@
 """Scene graphs read from physics only: support contacts and downward rays give ON, interior volumes INSIDE.
 
 Never from the layout: the observer looks at `MjData` (body poses, contacts, rays against geoms, interior
-volume sites) and names what it finds with the node that owns each geom or site. It keeps the graph
-incrementally: `update()` re-observes only bodies that moved since they were last observed and have come
-to rest, so sleeping bodies cost one vectorised pose comparison.
+volume sites) and names what it finds with the node that owns each geom or site. The one exception is where
+furniture stands, which never changes: most furniture is fused into the world body (see `homer_sim.build`),
+so it has no body pose to read. It keeps the graph incrementally: `update()` re-observes only bodies that
+moved since they were last observed and have come to rest, so sleeping bodies cost one vectorised pose
+comparison.
 """
 
 from __future__ import annotations
@@ -17,11 +19,15 @@ from homer_sim.build import FLOOR_GROUP, VOLUME_GROUP
 from homer_sim.catalog import CATALOG
 from homer_sim.errors import PhysicsError
 from homer_sim.graph import INSIDE, NONE, ON, SceneGraph
+from homer_sim.placement import base_height
 from homer_sim.shapes import cavity
 from homer_sim.world import World
 
 SUPPORT_TOL = 0.02  # m: a support surface may lie this far below an object's lowest point
 RAY_LIFT = 0.005  # m above an object's lowest point where its downward rays start
+BASE_RAY_LIFT = 0.01  # m above a furniture piece's base where its downward ray starts
+PAST_OWN = 1e-6  # m past a geom of the furniture itself where its ray starts again
+NO_BODY = -1  # mj_ray's bodyexclude for "exclude nothing"; 0 would exclude the floors, walls and fused furniture
 MOVED_DISTANCE = 1e-3  # m
 MOVED_COS_HALF_ANGLE = np.cos(np.deg2rad(0.5) / 2)  # |q1 . q2| below this: rotated more than 0.5 degree
 VOLUME_TOL = 0.01  # m of slack around interior volumes
@@ -46,8 +52,11 @@ class SceneGraphObserver:
         self.categories = world.declared_graph().categories
         index = {name: i for i, name in enumerate(self.nodes)}
         roots = model.body_rootid
-        self.body_node = np.array([index.get(model.body(int(roots[b])).name, -1) for b in range(model.nbody)])
-        self.geom_node = self.body_node[model.geom_bodyid]
+        body_node = np.array([index.get(model.body(int(roots[b])).name, -1) for b in range(model.nbody)])
+        # A geom belongs to the node of its root body; one on the world body (floors, furniture without parts)
+        # to the node its name begins with, and walls ("wall/<k>") to none.
+        self.geom_node = np.array([index.get(model.geom(g).name.split("/")[0], -1) if model.geom_bodyid[g] == 0
+                                   else body_node[model.geom_bodyid[g]] for g in range(model.ngeom)])
         self.movable = np.array([index[n] for n in world.object_names], dtype=np.int32)
         self.movable_bodies = world.object_body_ids
         self.half_extents = np.array([np.array(CATALOG[o.cls].size) / 2 for o in world.layout.objects])
@@ -59,8 +68,6 @@ class SceneGraphObserver:
                        if CATALOG[o.cls].supports]] = True
         self.cavities = [(k, cavity(CATALOG[o.cls])) for k, o in enumerate(world.layout.objects)
                          if CATALOG[o.cls].family in CONTAINER_FAMILIES]
-        self.is_movable = np.zeros(len(self.nodes), dtype=bool)
-        self.is_movable[self.movable] = True
         self.is_room = np.array([c == "room" for c in self.categories])
         volume_sites = [s for s in range(model.nsite) if model.site_group[s] == VOLUME_GROUP
                         and "/interior_" in model.site(s).name]
@@ -110,17 +117,16 @@ class SceneGraphObserver:
 
     # --- observation ------------------------------------------------------------------------------------
     def _observe_static(self) -> None:
-        """Parents of furniture, appliances and decor: what a ray from just above their base hits."""
-        model, data = self.world.model, self.world.data
-        for body in range(1, model.nbody):
-            node = self.body_node[body]
-            if node < 0 or self.is_room[node] or self.is_movable[node] or model.body_parentid[body] != 0:
-                continue
-            start = data.xpos[body] + np.array([0.0, 0.0, 0.01])
-            hit = self._ray(start, body, _RAY_GROUPS)
-            support = self.geom_node[hit[0]] if hit is not None else -1
+        """Parents of furniture, appliances and decor: what a ray from just above their base hits, past their
+        own geoms. Their bases come from the layout (they never move)."""
+        layout = self.world.layout
+        for f in layout.furniture:
+            node = self.nodes.index(f.name)
+            start = np.array([f.pos[0], f.pos[1], base_height(layout, f) + BASE_RAY_LIFT])
+            geom = self._geom_below(start, node, _RAY_GROUPS)
+            support = self.geom_node[geom] if geom >= 0 else -1
             if support < 0 or self.is_room[support]:
-                self._parent[node], self._relation[node] = self._room_below(start, body), INSIDE
+                self._parent[node], self._relation[node] = self._room_below(start, NO_BODY), INSIDE
             else:
                 self._parent[node], self._relation[node] = support, ON
 
@@ -213,8 +219,17 @@ class SceneGraphObserver:
         return int(self.volume_node[hits[np.argmin(np.prod(self.volume_half[hits], axis=1))]])
 
     def _ray(self, start: np.ndarray, exclude_body: int, groups: np.ndarray) -> tuple[int, float] | None:
+        """(geom, distance m) of the first geom straight below `start` not on `exclude_body` (-1: none), or None."""
+        assert exclude_body != 0, "body 0 holds the floors, walls and fused furniture"
         dist = mujoco.mj_ray(self.world.model, self.world.data, start, _DOWN, groups, 1, exclude_body, self._geomid)
         return None if dist < 0 else (int(self._geomid[0]), float(dist))
+
+    def _geom_below(self, start: np.ndarray, node: int, groups: np.ndarray) -> int:
+        """The first geom straight below `start` that does not belong to `node`, or -1."""
+        point = start.copy()
+        while (hit := self._ray(point, NO_BODY, groups)) is not None and self.geom_node[hit[0]] == node:
+            point[2] -= hit[1] + PAST_OWN  # from inside its own geom the ray stops where it leaves it
+        return -1 if hit is None else hit[0]
 
     def _room_below(self, point: np.ndarray, exclude_body: int) -> int:
         hit = self._ray(np.array([point[0], point[1], max(point[2], 0.0) + 0.05]), exclude_body, _FLOOR_GROUPS)
