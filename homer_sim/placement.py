@@ -64,20 +64,34 @@ def _overlaps(a: tuple, b: tuple, gap: float) -> bool:
     return a[0] < b[2] + gap and b[0] < a[2] + gap and a[1] < b[3] + gap and b[1] < a[3] + gap
 
 
-def pack_spot(place: Place, cls: ObjectClass, taken: list[tuple], step: float = 0.01) -> tuple[float, float] | None:
-    """First free (x, y) in the place frame for an object whose width (its x) runs along the place's y.
+def stored_yaw(f: Furniture, place: Place, cls: ObjectClass) -> float:
+    """Yaw (rad, world) of an object put on `place` of `f`: its x along the furniture's width, except inside a
+    cabinet, where a long object stands lengthwise (its x front to back, like books on a shelf), which keeps
+    its narrow side to the open front and leaves room beside it."""
+    lengthwise = f.kind == "cabinet" and place.relation == INSIDE and cls.size[0] > cls.size[1]
+    return f.yaw + (0.0 if lengthwise else math.pi / 2)
 
-    Scans from the front edge backwards, left to right; None if the object does not fit.
+
+def pack_spot(place: Place, cls: ObjectClass, taken: list[tuple], step: float = 0.01,
+              lengthwise: bool = False, centre_first: bool = False) -> tuple[float, float] | None:
+    """First free (x, y) in the place frame for an object whose width (its x) runs along the place's y, or
+    along its x (the depth) if `lengthwise`.
+
+    Scans from the front edge backwards, left to right (-y first) or, if `centre_first`, from the middle out;
+    None if the object does not fit.
     """
     if cls.size[2] > place.clearance - 0.005:
         return None
     half_y, half_x = cls.size[0] / 2, cls.size[1] / 2  # along place y (width) and x (depth)
+    if lengthwise:
+        half_y, half_x = half_x, half_y
     cx, cy, _ = place.center
     hx, hy = place.half_xy
     if half_x > hx or half_y > hy:
         return None
     for x in np.arange(cx + hx - half_x, cx - hx + half_x - 1e-9, -step):
-        for y in np.arange(cy - hy + half_y, cy + hy - half_y + 1e-9, step):
+        ys = np.arange(cy - hy + half_y, cy + hy - half_y + 1e-9, step)
+        for y in ys[np.argsort(np.abs(ys - cy), kind="stable")] if centre_first else ys:
             rect = (x - half_x, y - half_y, x + half_x, y + half_y)
             if not any(_overlaps(rect, t, SPOT_GAP) for t in taken):
                 taken.append(rect)
@@ -125,11 +139,16 @@ def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
         f = furniture[decl.parent]
         for k, place in _candidate_places(f, decl):
             spots = taken.setdefault((f.name, k), list(_obstacles_on(layout, f)))
-            spot = pack_spot(place, cls, spots)
+            yaw = stored_yaw(f, place, cls)
+            # in a cabinet the first declared (the everyday things) stand front and centre, where a hand reaches
+            # past the open door and the side walls
+            spot = pack_spot(place, cls, spots, lengthwise=yaw == f.yaw, centre_first=f.kind == "cabinet")
+            if spot is None and f.kind == "cabinet":  # what does not fit beside them packs from the side
+                spot = pack_spot(place, cls, spots, lengthwise=yaw == f.yaw)
             if spot is not None:
                 world = local_to_world(f, np.array([spot[0], spot[1], place.center[2]]), base_height(layout, f))
                 pos = (float(world[0]), float(world[1]), float(world[2] + cls.size[2] / 2 + SPAWN_LIFT))
-                poses[decl.name] = StartPose(decl.name, pos, yaw_quat(f.yaw + math.pi / 2))
+                poses[decl.name] = StartPose(decl.name, pos, yaw_quat(yaw))
                 break
         else:
             raise LayoutError(f"{decl.name}: does not fit on any place of {f.name} (size {cls.size} m)")
@@ -160,4 +179,5 @@ def place_world(layout: Layout, f: Furniture, place: Place, opened: bool = False
     }
 
 
-__all__ = ["ON", "INSIDE", "StartPose", "start_poses", "pack_spot", "place_world", "base_height", "yaw_quat"]
+__all__ = ["ON", "INSIDE", "StartPose", "start_poses", "pack_spot", "stored_yaw", "place_world", "base_height",
+           "yaw_quat"]

@@ -19,7 +19,7 @@ from homer_sim.errors import HomerError
 from homer_sim.floorplan import floor_plan, inflate
 from homer_sim.furniture import Place, furniture_geometry
 from homer_sim.graph import INSIDE, ON
-from homer_sim.placement import SPOT_GAP, base_height, place_world
+from homer_sim.placement import SPOT_GAP, base_height, place_world, stored_yaw
 from homer_sim.validate import base_pose_for
 
 PERSON_RADIUS = 0.25  # m
@@ -151,10 +151,11 @@ class Spots:
         f = self.furniture[node]
         place = self._places[node][place_index]
         world_place = place_world(self.layout, f, place, opened=place.part is not None)
-        size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        cls = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls]
+        size = cls.size
         if size[2] > place.clearance - 0.005:
             return None
-        yaw = f.yaw + math.pi / 2
+        yaw = stored_yaw(f, place, cls)
         half_x, half_y = _rotated_half(size, yaw)
         x0, y0, x1, y1 = world_place["rect"]
         if x1 - x0 < 2 * half_x or y1 - y0 < 2 * half_y:
