@@ -29,6 +29,14 @@ DRIVE_REST_STEPS = 10
 OPEN_ENOUGH = 0.9
 
 
+class DoorBlocked(AvatarError):
+    """A door the person swings touches an object (`blocker`) and stops there."""
+
+    def __init__(self, message: str, blocker: str) -> None:
+        super().__init__(message)
+        self.blocker = blocker
+
+
 class Handling:
     """Grasping, placing and articulations; mixed into the Executor, whose state it uses (world, avatar,
     spots, observer, rng, the observed graph) and whose walking (`go`) and observing (`observe`) it calls."""
@@ -77,7 +85,8 @@ class Handling:
             blocker = self._door_blocked(art) if art.joint_type == "hinge" else None
             if blocker is not None:
                 data.qpos[art.qpos_adr], data.qvel[art.dof_adr] = q - (q - start) / i, 0.0
-                raise AvatarError(f"{art.name} is blocked by {blocker} at openness {self.world.openness(art.name):.2f}")
+                raise DoorBlocked(f"{art.name} is blocked by {blocker} at openness "
+                                  f"{self.world.openness(art.name):.2f}", blocker)
             if hand is not None:
                 self.avatar.set_hand(hand, data.site_xpos[handle], follow=False)
         data.qpos[art.qpos_adr], data.qvel[art.dof_adr] = target, 0.0
@@ -118,15 +127,56 @@ class Handling:
         return []
 
     def ensure_open(self, parts: list, opened: list) -> None:
+        """Open each part that is not open enough; an object in a door's way is set aside first (once)."""
         for art in parts:
             if self.world.openness(art.name) < OPEN_ENOUGH:
-                self.drive(art, 1.0)
+                try:
+                    self.drive(art, 1.0)
+                except DoorBlocked as blocked:
+                    self._set_aside(blocked)
+                    self.drive(art, 1.0)
                 opened.append(art)
 
     def close_parts(self, parts: list) -> None:
+        """Close each part; an object sticking out into a door's way is pushed back in first (once)."""
         for art in parts:
             if self.world.openness(art.name) > 0.02:
-                self.drive(art, 0.0)
+                try:
+                    self.drive(art, 0.0)
+                except DoorBlocked as blocked:
+                    self._push_back(blocked.blocker, art.name.split("/")[0], blocked)
+                    self.drive(art, 0.0)
+
+    def _push_back(self, name: str, furniture: str, blocked: DoorBlocked) -> None:
+        """Put `name` (in the way of a door of `furniture`) at a free spot inside it, as a person tidies a
+        toppled glass back onto its shelf before closing the cupboard; re-raises `blocked` if there is none."""
+        if name in self.avatar.carried():
+            raise blocked
+        exclude = set(self.carried_indices()) | {self.world.object_index(name)}
+        for index, _ in self.spots.places_of(furniture, INSIDE):
+            spot = self.spots.free_spot(name, furniture, index, self.rng, exclude)
+            if spot is not None:
+                log.debug("%s: pushed back into %s so the door closes", name, furniture)
+                self.world.set_object_pose(name, spot.pos, (math.cos(spot.yaw / 2), 0.0, 0.0, math.sin(spot.yaw / 2)))
+                self.settle()
+                return
+        raise blocked
+
+    def _set_aside(self, blocked: DoorBlocked) -> None:
+        """Move the object in the way of a door the person opens to a free floor spot nearby (it fell out, or
+        someone left it there); re-raises `blocked` if the person holds it or there is no room."""
+        name = blocked.blocker
+        room = self.world.layout.room_at(self.avatar.x, self.avatar.y)
+        if name in self.avatar.carried() or room is None:
+            raise blocked
+        exclude = set(self.carried_indices()) | {self.world.object_index(name)}
+        try:
+            spot = self.spots.floor_spot(name, room, (self.avatar.x, self.avatar.y), self.rng, exclude)
+        except PlacementError:
+            raise blocked from None
+        log.debug("%s: set aside so a door opens", name)
+        self.world.set_object_pose(name, spot.pos)
+        self.settle()
 
     # --- hands ------------------------------------------------------------------------------------------
     def grab(self, name: str) -> None:
