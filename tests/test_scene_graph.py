@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from homer_sim.graph import INSIDE, ON, GraphError, SceneGraph
@@ -141,6 +142,9 @@ def test_observed_graph_is_always_an_in_tree(world: World, drops) -> None:
     world.reset()
     for index, x, y, z in drops:
         world.set_object_pose(world.object_names[index], (x, y, z))
+    mujoco.mj_forward(world.model, world.data)
+    # a drop, not a teleport into something: an object started deep inside another is shot out by the contact
+    assume(world.data.ncon == 0 or world.data.contact.dist[: world.data.ncon].min() > -0.01)
     world.settle(3.0)
     graph = SceneGraphObserver(world).observe_all()  # the constructor validates the in-tree
     movable = [graph.index(n) for n in world.object_names]
