@@ -109,7 +109,7 @@ def _check_objects(layout: Layout) -> None:
             raise LayoutError(f"{o.name}: {o.parent} is not a container; nothing can be INSIDE it")
 
 
-def _access_sides(f: Furniture) -> list[tuple[np.ndarray, float, float]]:
+def access_sides(f: Furniture) -> list[tuple[np.ndarray, float, float]]:
     """(outward unit normal in the furniture frame, half depth along it, half width along the edge) per side."""
     w, d, _ = f.size
     sides = [(np.array([1.0, 0.0]), d / 2, w / 2)]
@@ -170,7 +170,7 @@ def _check_places(layout: Layout, plan: FloorPlan, f: Furniture) -> None:
 def base_pose_for(layout: Layout, plan: FloorPlan, f: Furniture, rect: tuple, obstacles: list[tuple]):
     """A free robot base position (x, y, yaw facing the furniture) from which `rect` is within reach, or None."""
     z0 = base_height(layout, f)
-    for normal, half_depth, half_width in _access_sides(f):
+    for normal, half_depth, half_width in access_sides(f):
         tangent = np.array([-normal[1], normal[0]])
         for dist in BASE_DISTANCES:
             for offset in BASE_OFFSETS:

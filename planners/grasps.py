@@ -18,7 +18,8 @@ MAX_WIDTH = 0.13  # m: widest grasp (stroke 0.14 m minus a margin)
 MIN_HEIGHT = 0.008  # m: thinner objects leave the pads nothing to hold above the support
 PAD_HALF = 0.025  # m: half length of a finger pad along the approach axis
 SUPPORT_CLEARANCE = 0.006  # m between the fingertips and the supporting surface
-SIDE_HEIGHT = 0.4  # fraction of an object's height at which a side grasp holds it
+SIDE_HEIGHTS = (0.4, 0.75)  # fractions of an object's height at which side grasps hold it, in the order tried
+# (low holds steadier; high keeps the arm clear of a low shelf's edge and within reach near the floor)
 SIDE_MIN_Z = 0.035  # m above the support: the palm (0.03 m half height) clears the shelf
 SIDE_MARGIN = 0.01  # m per finger between an open pad and the object before a side grasp closes
 SIDE_DEPTH = 0.022  # m from an object's near face to the grip site: the palm (0.035 m behind it) stays clear
@@ -118,7 +119,7 @@ def side_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwar
 
     outward: horizontal unit vector (shape (2,) or (3,)) out of the furniture's front, towards the robot. The
     grip x points into the furniture, the fingers close across the object (horizontally), the pads sit
-    SIDE_HEIGHT of the object's height above its support (at least SIDE_MIN_Z, so the palm clears the shelf).
+    SIDE_HEIGHTS of the object's height above its support (at least SIDE_MIN_Z, so the palm clears the shelf).
     front: how far (m) the furniture's front plane lies out from the object's centre along `outward`; the palm
     (18 cm wide) stays in front of it, so the pads may hold only the object's front part (at least
     SIDE_MIN_OVERLAP deep).
@@ -134,13 +135,15 @@ def side_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwar
     if width > MAX_WIDTH or sz < SIDE_MIN_Z + 0.01:
         return []
     support = position[2] - sz / 2
-    z = support + min(max(SIDE_HEIGHT * sz, SIDE_MIN_Z), sz - 0.015)
     rotation = np.column_stack([-out, across, np.cross(-out, across)])
     along = max(depth / 2 - SIDE_DEPTH, front - PALM_SETBACK)  # grip site out from the centre, m
     if depth / 2 - (along - PAD_HALF) < SIDE_MIN_OVERLAP:
         return []
-    centre = np.array([position[0], position[1], z]) + out * along
-    return [Grasp(centre, rotation, min(GRIPPER_OPEN, width / 2 + SIDE_MARGIN), "side")]
+    heights = sorted({round(min(max(f * sz, SIDE_MIN_Z), sz - 0.015), 3) for f in SIDE_HEIGHTS},
+                     key=lambda h: abs(h - SIDE_HEIGHTS[0] * sz))
+    return [Grasp(np.array([position[0], position[1], support + h]) + out * along, rotation,
+                  min(GRIPPER_OPEN, width / 2 + SIDE_MARGIN), "side" if k == 0 else "side-high")
+            for k, h in enumerate(heights)]
 
 
 def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,

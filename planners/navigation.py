@@ -15,7 +15,7 @@ from homer_sim.errors import HomerError
 from homer_sim.floorplan import find_path, floor_plan, inflate, path_length
 from homer_sim.furniture import local_to_world
 from homer_sim.placement import base_height
-from homer_sim.validate import ROBOT_RADIUS
+from homer_sim.validate import ROBOT_RADIUS, access_sides
 from planners.control import Controller
 
 STAND_DISTANCES = np.arange(0.34, 0.81, 0.02)  # m from the furniture's front face to the base centre
@@ -60,24 +60,28 @@ class Navigator:
             rects.append((*pts.min(axis=0), *pts.max(axis=0)))
         return rects
 
-    def stand_pose(self, node: str, target_xy: tuple[float, float]) -> tuple[float, float, float]:
-        """A free base pose (x m, y m, yaw rad) facing furniture `node` from its front, nearest in front of
-        `target_xy` (m, world)."""
+    def stand_pose(self, node: str, target_xy: tuple[float, float], reach: float = 0.0) -> tuple[float, float, float]:
+        """A free base pose (x m, y m, yaw rad) facing furniture `node` from its front (or, for furniture used
+        from all sides, from the side nearest `target_xy`), nearest in front of `target_xy` (m, world), at
+        least `reach` m from the furniture (what the robot holds out in front stays clear of it)."""
         if node not in self.furniture:
             raise NavigationError(f"{node!r} is not furniture; known: {', '.join(sorted(self.furniture))}")
         f = self.furniture[node]
-        depth = f.size[1]
-        normal = self.front_normal(node)
-        tangent = np.array([-normal[1], normal[0]])
-        front = np.array(f.pos) + normal * depth / 2
-        along = float(np.dot(np.asarray(target_xy) - front, tangent))
+        centre = np.array(f.pos)
+        rotation = np.column_stack([self.front_normal(node), [-self.front_normal(node)[1], self.front_normal(node)[0]]])
+        sides = sorted(access_sides(f), key=lambda side: side[1] - float(
+            np.dot(rotation.T @ (np.asarray(target_xy) - centre), side[0])))
         obstacles = self.open_part_rects()
-        for offset in STAND_OFFSETS:
-            for distance in STAND_DISTANCES:
-                xy = front + tangent * (along + offset) + normal * distance
-                if self.plan.disk_is_free(float(xy[0]), float(xy[1]), ROBOT_RADIUS, obstacles):
-                    yaw = math.atan2(-normal[1], -normal[0])
-                    return float(xy[0]), float(xy[1]), yaw
+        for local_normal, half_depth, _ in sides:
+            normal = rotation @ local_normal
+            tangent = np.array([-normal[1], normal[0]])
+            front = centre + normal * half_depth
+            along = float(np.dot(np.asarray(target_xy) - front, tangent))
+            for offset in STAND_OFFSETS:
+                for distance in STAND_DISTANCES[STAND_DISTANCES >= min(reach, STAND_DISTANCES[-1])]:
+                    xy = front + tangent * (along + offset) + normal * distance
+                    if self.plan.disk_is_free(float(xy[0]), float(xy[1]), ROBOT_RADIUS, obstacles):
+                        return float(xy[0]), float(xy[1]), math.atan2(-normal[1], -normal[0])
         raise NavigationError(f"no free base pose in front of {node} near {np.round(target_xy, 2).tolist()}")
 
     def stand_near(self, target_xy: tuple[float, float]) -> tuple[float, float, float]:
@@ -101,12 +105,14 @@ class Navigator:
         normal = local_to_world(f, np.array([[1.0, 0.0, 0.0]])) - local_to_world(f, np.zeros((1, 3)))
         return normal[0, :2] / np.linalg.norm(normal[0, :2])
 
-    def path_to(self, goal: tuple[float, float, float]) -> list[tuple[float, float]]:
-        """Waypoints (x, y) in m from the base's current position to `goal`, avoiding open doors."""
+    def path_to(self, goal: tuple[float, float, float], reach: float = ROBOT_RADIUS) -> list[tuple[float, float]]:
+        """Waypoints (x, y) in m from the base's current position to `goal`, keeping `reach` m (the base, or a
+        carried object held out in front, whichever sticks out further) from open doors and drawers."""
         start = tuple(self.controller.q()[:2])
         extra = np.zeros_like(self.blocked)
+        reach = max(reach, ROBOT_RADIUS)
         for rect in self.open_part_rects():
-            grown = (rect[0] - ROBOT_RADIUS, rect[1] - ROBOT_RADIUS, rect[2] + ROBOT_RADIUS, rect[3] + ROBOT_RADIUS)
+            grown = (rect[0] - reach, rect[1] - reach, rect[2] + reach, rect[3] + reach)
             i0, j0 = self.plan.cell(grown[0], grown[1])
             i1, j1 = self.plan.cell(grown[2], grown[3])
             extra[max(i0, 0) : i1 + 1, max(j0, 0) : j1 + 1] = True
@@ -115,10 +121,10 @@ class Navigator:
             raise NavigationError(f"no path from {np.round(start, 2).tolist()} to {np.round(goal[:2], 2).tolist()}")
         return path
 
-    def drive_to(self, goal: tuple[float, float, float], tuck: np.ndarray) -> float:
-        """Drive the base to `goal` (x m, y m, yaw rad) with the torso and arm at `tuck` (shape (13,));
-        returns the path length in m."""
-        path = self.path_to(goal)
+    def drive_to(self, goal: tuple[float, float, float], tuck: np.ndarray, reach: float = ROBOT_RADIUS) -> float:
+        """Drive the base to `goal` (x m, y m, yaw rad) with the torso and arm at `tuck` (shape (13,)), keeping
+        `reach` m from open doors (see `path_to`); returns the path length in m."""
+        path = self.path_to(goal, reach)
         keep = path[1:-1][::WAYPOINT_STRIDE] + [path[-1]]
         q0 = self.controller.target.copy()
         yaw0 = q0[2]

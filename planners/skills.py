@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
 from homer_sim.catalog import CATALOG
@@ -38,7 +39,10 @@ SIDE_PULL = 0.35  # m: then draws it this far out of the furniture,
 SIDE_RAISE = 0.09  # m: then raises it this much more
 ENTRY_OUT = 0.12  # m: a grasp inside furniture is entered from this far in front of its front plane
 ENTRY_STEP = 0.05  # m between checked configurations on the way in
+PASS_OVER = 0.03  # m between a carried object and a surface it is carried over before it is put down
 PULL_BASE_COST = 0.1  # IK damping on the base while drawing an object out: the base backs away
+WAYPOINT_TOL = (0.015, np.deg2rad(5.0))  # m, rad: IK tolerance of a straight line's intermediate points (the end
+# point is exact); tight ones stall near joint limits on the way
 
 
 @dataclass(frozen=True)
@@ -72,13 +76,15 @@ class Robot:
                              seeds=seeds)
 
     def _line(self, start: np.ndarray, end: np.ndarray, quat: np.ndarray, steps: int = 4,
-              base_cost: float = GRASP_BASE_COST) -> list[np.ndarray] | None:
+              base_cost: float = GRASP_BASE_COST, loose_end: bool = False) -> list[np.ndarray] | None:
         """IK configurations along the straight grip-site line start -> end (m), or None if any is unreachable;
         base_cost: IK damping on the base (low lets the base back away, e.g. drawing an object off a shelf)."""
         q = self.controller.target.copy()
         path = []
         for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
-            result = self.ik.solve(q, start + s * (end - start), quat, base_cost=base_cost, seeds=False)
+            loose = {} if s == 1.0 and not loose_end else {"position_tol": WAYPOINT_TOL[0],
+                                                            "orientation_tol": WAYPOINT_TOL[1]}
+            result = self.ik.solve(q, start + s * (end - start), quat, base_cost=base_cost, seeds=False, **loose)
             if not result.converged:
                 return None
             q = result.q
@@ -111,17 +117,30 @@ class Robot:
             self.controller.move_through([raised, tuck])
         self.folded = True
 
-    def go_to(self, node: str, target_xy: np.ndarray) -> None:
+    def go_to(self, node: str, target_xy: np.ndarray, surface_z: float | None = None) -> bool:
         """Drive to a free base pose in front of furniture `node`, facing `target_xy`: with the arm tucked, or
-        while holding an object with the grip site CARRY_REACH m in front of the base at CARRY_HEIGHT m."""
-        goal = self.navigator.stand_pose(node, tuple(target_xy))
+        while holding an object with the grip site CARRY_REACH m in front of the base at CARRY_HEIGHT m. A held
+        object keeps clear of open doors, and, if it hangs lower than PASS_OVER above `surface_z` (m, the surface
+        it is for), of the furniture itself: then the robot stops short and returns True."""
         if self.folded:
             posture = self.tuck.copy()
         else:
             path = self._carry_path()
             self.controller.move_through(path)
             posture = path[-1]
-        self.navigator.drive_to(goal, posture)
+        reach, short = 0.0, False
+        if self.held is not None:  # the held object sticks out past the base
+            size = CATALOG[self.world.layout.objects[self.world.object_index(self.held)].cls].size
+            position, quat = self.world.object_pose(self.held)
+            rotation = np.zeros(9)
+            mujoco.mju_quat2Mat(rotation, quat)
+            half_height = float(np.abs(rotation.reshape(3, 3)[2]) @ np.asarray(size) / 2)  # tilted or not
+            reach = float(np.linalg.norm(position[:2] - self.controller.q()[:2]) + np.linalg.norm(size[:2]) / 2
+                          + CLEARANCE)
+            short = surface_z is not None and position[2] - half_height < surface_z + PASS_OVER
+        self.navigator.drive_to(self.navigator.stand_pose(node, tuple(target_xy), reach if short else 0.0), posture,
+                                reach)
+        return short
 
     def _go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float) -> list[np.ndarray] | None:
         """Drive (arm tucked) to a free base pose from which the way into `grasp` is reachable with the arm
@@ -178,7 +197,8 @@ class Robot:
         steps = max(2, int(np.ceil(np.linalg.norm(point - start) / CARRY_STEP)))
         q, path = self.controller.target.copy(), []
         for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
-            result = self.ik.solve(q, start + s * (point - start), quat, base_cost=GRASP_BASE_COST, seeds=False)
+            result = self.ik.solve(q, start + s * (point - start), quat, base_cost=GRASP_BASE_COST, seeds=False,
+                                   position_tol=WAYPOINT_TOL[0], orientation_tol=WAYPOINT_TOL[1])
             if not result.converged:
                 break
             q = result.q
@@ -320,25 +340,34 @@ class Robot:
         if spot is None:
             return SkillResult(False, f"place: no free spot for {name} on {node}")
         target = np.array(spot.pos)
-        grip_pos = self.world.data.site("robot/grip").xpos.copy()
-        obj_pos, _ = self.world.object_pose(name)
-        offset = grip_pos - obj_pos  # the object hangs where it is held: keep that offset
+        held_at = self._held_offset(name)  # where the object hangs in the hand (grip frame)
+        size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
         try:
-            self.go_to(node, target[:2])
+            short = self.go_to(node, target[:2], surface_z=target[2] - size[2] / 2)
         except NavigationError as error:
             return SkillResult(False, f"place: {error}")
-        carried = self.world.data.site("robot/grip").xpos - self.world.object_pose(name)[0]
-        if np.linalg.norm(carried - offset) > CARRY_SLIP:
+        slip = float(np.linalg.norm(self._held_offset(name) - held_at))
+        if slip > CARRY_SLIP:
             self.held = None
-            return SkillResult(False, f"place: {name} slipped {np.linalg.norm(carried - offset) * 100:.1f} cm in "
-                                      "the hand while carried")
+            return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand while carried")
+        grip = self.world.data.site("robot/grip")
+        offset = grip.xpos - self.world.object_pose(name)[0]  # keep the object where it hangs now
         quat = self._held_quat()
         release = target + offset + np.array([0.0, 0.0, 0.01])
         above = release + np.array([0.0, 0.0, APPROACH])
-        pre = self._ik(above, quat)
-        if not pre.converged:
-            return SkillResult(False, f"place: {name} above {node} is {pre.reason}")
-        self.reach(pre.q)
+        # Stopped short with the object low: lift it over the surface, then drive in close (the object passes
+        # over the edge) and move it across to above the spot in a straight line.
+        if short and self._grip_line(np.array([*grip.xpos[:2], max(grip.xpos[2], release[2] + PASS_OVER)]), quat):
+            try:
+                self.navigator.drive_to(self.navigator.stand_pose(node, tuple(target[:2])),
+                                        self.controller.target.copy())
+            except NavigationError:
+                pass  # reach from where it stands
+        if not self._grip_line(above, quat):
+            pre = self._ik(above, quat)
+            if not pre.converged:
+                return SkillResult(False, f"place: {name} above {node} is {pre.reason}")
+            self.reach(pre.q)
         down = self._line(above, release, quat)
         if down is None:
             return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
@@ -370,6 +399,24 @@ class Robot:
         if self.held is not None:
             return SkillResult(False, f"close {name}: the hand holds {self.held}")
         return SkillResult(*PartMover(self).move_to(name, opening=False))
+
+    def _grip_line(self, point: np.ndarray, quat: np.ndarray) -> bool:
+        """Move the grip site in a straight line to `point` (m), orientation `quat` kept, CARRY_STEP m between
+        IK waypoints (each within WAYPOINT_TOL, the end too: these are moves between poses, not grasps), the base
+        free to follow; False (nothing moved) if the line leaves the arm's reach."""
+        start = self.world.data.site("robot/grip").xpos.copy()
+        steps = max(1, int(np.ceil(np.linalg.norm(point - start) / CARRY_STEP)))
+        path = self._line(start, point, quat, steps=steps, base_cost=PULL_BASE_COST, loose_end=True)
+        if path is None:
+            return False
+        self.controller.move_through(path)
+        return True
+
+    def _held_offset(self, name: str) -> np.ndarray:
+        """Where object `name` sits in the grip site's frame (m, shape (3,)): it stays put while the hand turns,
+        so a change of it is slip."""
+        grip = self.world.data.site("robot/grip")
+        return grip.xmat.reshape(3, 3).T @ (self.world.object_pose(name)[0] - grip.xpos)
 
     def _held_quat(self) -> np.ndarray:
         """The grip site's current orientation (wxyz), kept while carrying."""
