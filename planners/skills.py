@@ -138,6 +138,15 @@ class Robot:
             reach = float(np.linalg.norm(position[:2] - self.controller.q()[:2]) + np.linalg.norm(size[:2]) / 2
                           + CLEARANCE)
             short = surface_z is not None and position[2] - half_height < surface_z + PASS_OVER
+            if short:  # the straight carry line stalled low: one IK solution lifts it clear, if there is one
+                grip = self.world.data.site("robot/grip").xpos
+                lift = surface_z + PASS_OVER + half_height - position[2]
+                higher = self._ik(grip + np.array([0.0, 0.0, lift + 0.02]), self._held_quat())
+                if higher.converged:
+                    self.controller.move_through([higher.q])
+                    posture = higher.q
+                    position = self.world.object_pose(self.held)[0]
+                    short = position[2] - half_height < surface_z + PASS_OVER
         self.navigator.drive_to(self.navigator.stand_pose(node, tuple(target_xy), reach if short else 0.0), posture,
                                 reach)
         return short

@@ -38,20 +38,29 @@ def _where(run: MorningRun, minute: int) -> dict[str, tuple[str, int]]:
     return {o: (run.nodes[int(day.parents[t][index[o]])], int(day.relations[t][index[o]])) for o in ITEMS}
 
 
-@pytest.mark.xfail(strict=True, reason="known defect (issue 6): shelf picks in the cupboard and the fridge door's "
-                   "edge grasp still fail, so cereal and bowl do not reach the table; strict, so a fix shows up")
-def test_the_table_is_set_before_breakfast_and_cleared_after(morning: tuple[MorningRun, Path]) -> None:
+def test_the_robot_sets_the_table_before_breakfast(morning: tuple[MorningRun, Path]) -> None:
     run, _ = morning
     assert run.assist.error == "", run.assist.error
-    (activity, start, end), = run.result["schedule"]
+    (activity, start, _), = run.result["schedule"]
     assert activity == "breakfast"
     before = max(m for m in run.assist.day.minutes if m <= start)  # the last snapshot before the person reaches
     failures = [f"{r['object']}: {r['reason']}" for r in run.result["relocations"] if not r["done"]]
-    on_table = _where(run, before)
+    on_table = _where(run, before)  # before breakfast only the robot has moved anything
     assert all(p == (TABLE, 1) for p in on_table.values()), f"at {before} min: {on_table}; failures: {failures}"
+
+
+@pytest.mark.xfail(strict=True, reason="known defect (issue 6): the robot cannot yet put an object INSIDE a cabinet "
+                   "shelf (it lowers from above, where the shelf above is in the way), so the person puts cereal and "
+                   "milk back; strict, so a fix shows up")
+def test_the_robot_clears_up_after_breakfast(morning: tuple[MorningRun, Path]) -> None:
+    run, _ = morning
     last = run.assist.day.minutes[-1]
     after = _where(run, last)
-    assert all(after[o][0] in PUT_AWAY[o] for o in ITEMS), f"at {last} min: {after}; failures: {failures}"
+    assert all(after[o][0] in PUT_AWAY[o] for o in ITEMS), f"at {last} min: {after}"
+    (_, start, _), = run.result["schedule"]
+    back = {r["object"] for r in run.result["relocations"] if r["done"] and r["minute"] > start
+            and r["to"] in PUT_AWAY.get(r["object"], ())}
+    assert back >= set(ITEMS), f"the robot put back only {sorted(back)}: {run.result['relocations']}"
 
 
 def test_relocations_are_scored_against_the_unassisted_replay(morning: tuple[MorningRun, Path]) -> None:
