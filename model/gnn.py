@@ -72,9 +72,8 @@ def neighbour_sums(weight: torch.Tensor, edge: torch.Tensor) -> torch.Tensor:
     weight: Shape (B, N, N), weight of pair (i, j). edge: Shape (B, N, N, H).
     Returns: Shape (B, N, 2H) = [sum_k w_ik e_ik, sum_l w_li e_li].
     """
-    outgoing = torch.einsum("bij,bijh->bih", weight, edge)
-    incoming = torch.einsum("bji,bjih->bih", weight, edge)
-    return torch.cat([outgoing, incoming], dim=-1)
+    weighted = weight[..., None] * edge  # one (B, N, N, H) product summed both ways: the incoming einsum ran as
+    return torch.cat([weighted.sum(2), weighted.sum(1)], dim=-1)  # a loop of small copies over a transposed view
 
 
 class PairReadout(nn.Module):
