@@ -16,7 +16,7 @@ $(BIN)/homer: pyproject.toml
 install: $(BIN)/homer
 
 demo: install
-	$(BIN)/homer world check --rrd apartment.rrd
+	$(BIN)/homer demo breakfast --rrd breakfast.rrd
 
 test: install
 	$(BIN)/python -m pytest -q
