@@ -42,8 +42,9 @@ def test_summary_counts_trials_and_rates() -> None:
     assert summary["worst_class_rate"] == 0.5 and not summary["meets_targets"]
 
 
-QUICK_MIN_OVERALL = 0.36  # regression floor: 4 of 11 measured with pitched and rim grasps inside cabinets (the
-# cabinet-shelf classes still fail; the targets are asserted by the slow full-suite test)
+QUICK_MIN_OVERALL = 0.54  # regression floor: 6 of 11 measured with objects stored lengthwise, front and centre in
+# cabinets (cups, mugs, the pot, the apple in the fridge and the cd still fail; the slow full-suite test asserts
+# the targets)
 
 
 def test_quick_subset_lifts_and_holds() -> None:
