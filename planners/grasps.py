@@ -83,7 +83,7 @@ def ungraspable_reason(cls: ObjectClass) -> str | None:
     sx, sy, sz = cls.size
     if sz < MIN_HEIGHT:
         return f"flat, {sz * 1000:.0f} mm thin: thinner than {MIN_HEIGHT * 1000:.0f} mm"
-    if cls.family in ("bowl", "pot", "bin", "cup", "mug"):
+    if cls.is_container:
         return None if cavity(cls) is not None else "container without a cavity"
     if min(sx, sy) > MAX_WIDTH:
         return f"{min(sx, sy) * 100:.0f} cm across its narrow side, wider than the {MAX_WIDTH * 100:.0f} cm grasp"
@@ -98,7 +98,7 @@ def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_x
     support = position[2] - sz / 2
     top = position[2] + sz / 2
     grip_z = max(top - 0.02, support + PAD_HALF + SUPPORT_CLEARANCE)
-    hollow = cavity(cls) if cls.family in ("bowl", "pot", "bin", "cup", "mug") else None
+    hollow = cavity(cls)
     if hollow is not None and min(sx, sy) > MAX_WIDTH - 0.02:
         return _rim_grasps(hollow, position, yaw, support, robot_xy)
     grasps = []
@@ -124,14 +124,10 @@ def side_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwar
     (18 cm wide) stays in front of it, so the pads may hold only the object's front part (at least
     SIDE_MIN_OVERLAP deep).
     """
-    sx, sy, sz = cls.size
-    out = np.array([outward[0], outward[1], 0.0]) / np.linalg.norm(outward[:2])
-    across = np.array([-out[1], out[0], 0.0])
-    yaw = 2.0 * math.atan2(quat[3], quat[0])
-    body_x = np.array([math.cos(yaw), math.sin(yaw), 0.0])
-    body_y = np.array([-body_x[1], body_x[0], 0.0])
-    width = abs(np.dot(across, body_x)) * sx + abs(np.dot(across, body_y)) * sy  # extent along the finger travel
-    depth = abs(np.dot(out, body_x)) * sx + abs(np.dot(out, body_y)) * sy  # extent along the approach
+    sz = cls.size[2]
+    out, across, yaw = _shelf_frame(outward, quat)
+    width = _extent(across, cls, yaw)  # along the finger travel
+    depth = _extent(out, cls, yaw)  # along the approach
     if width > MAX_WIDTH or sz < SIDE_MIN_Z + 0.01:
         return []
     support = position[2] - sz / 2
@@ -159,14 +155,10 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
     object's centre to the front plane along it. Best first; empty when no grasp fits the shape.
     """
     sx, sy, sz = cls.size
-    out = np.array([outward[0], outward[1], 0.0]) / np.linalg.norm(outward[:2])
-    across = np.array([-out[1], out[0], 0.0])
-    yaw = 2.0 * math.atan2(quat[3], quat[0])
-    body_x = np.array([math.cos(yaw), math.sin(yaw), 0.0])
-    body_y = np.array([-body_x[1], body_x[0], 0.0])
+    out, across, yaw = _shelf_frame(outward, quat)
     support, top = position[2] - sz / 2, position[2] + sz / 2
     grasps = side_grasps(cls, position, quat, outward, front) or side_grasps(cls, position, quat, outward, -np.inf)
-    hollow = cavity(cls) if cls.family in ("bowl", "pot", "bin", "cup", "mug") else None
+    hollow = cavity(cls)
     if hollow is not None and min(sx, sy) > MAX_WIDTH - 0.02:
         return grasps + _tilted_rims(hollow, position, yaw, support, out)
     rims = _tilted_rims(hollow, position, yaw, support, out) if hollow is not None else []
@@ -174,12 +166,12 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
         x = math.cos(pitch) * -out + np.array([0.0, 0.0, -math.sin(pitch)])
         # fingers across the object seen from the front; from straight above also along the approach
         for y in (across, np.cross(across, x))[: 2 if pitch == SHELF_PITCHES[-1] else 1]:
-            width = abs(np.dot(y, body_x)) * sx + abs(np.dot(y, body_y)) * sy
+            width = _extent(y, cls, yaw)
             if width > MAX_WIDTH:
                 continue
             tip_drop = PAD_HALF * math.sin(pitch) + FINGER_HALF_THICKNESS * math.cos(pitch)
             z = max(top - TOP_DEPTH, support + tip_drop + SUPPORT_CLEARANCE)
-            depth = abs(np.dot(out, body_x)) * sx + abs(np.dot(out, body_y)) * sy
+            depth = _extent(out, cls, yaw)
             edge = PALM_LOW_EDGE[0] * math.cos(pitch) + PALM_LOW_EDGE[1] * math.sin(pitch)  # out of the grip
             shift = 0.0 if pitch == SHELF_PITCHES[-1] else max(0.0, depth / 2 + PALM_MARGIN - edge)
             if shift > depth / 2 - SIDE_MIN_OVERLAP / 2:
@@ -188,6 +180,19 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
             grasps.append(Grasp(centre, np.column_stack([x, y, np.cross(x, y)]), min(GRIPPER_OPEN, width / 2 + 0.025),
                                 f"shelf-{math.degrees(pitch):.0f}", SHELF_APPROACH))
     return grasps + rims
+
+
+def _shelf_frame(outward: np.ndarray, quat: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """(out, across, yaw): the horizontal unit vector out of the furniture's front (shape (3,)), the one along
+    its front (shape (3,)), and the object's yaw (rad) from its body `quat` (wxyz, upright)."""
+    out = np.array([outward[0], outward[1], 0.0]) / np.linalg.norm(outward[:2])
+    return out, np.array([-out[1], out[0], 0.0]), 2.0 * math.atan2(quat[3], quat[0])
+
+
+def _extent(direction: np.ndarray, cls: ObjectClass, yaw: float) -> float:
+    """Extent (m) along horizontal unit `direction` (shape (3,)) of the footprint of `cls` turned by `yaw`."""
+    return abs(direction[0] * math.cos(yaw) + direction[1] * math.sin(yaw)) * cls.size[0] + abs(
+        -direction[0] * math.sin(yaw) + direction[1] * math.cos(yaw)) * cls.size[1]
 
 
 def _tilted_rims(hollow, position: np.ndarray, yaw: float, support: float, out: np.ndarray) -> list[Grasp]:
