@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 
 from homer_sim.catalog import CATALOG
@@ -76,9 +75,12 @@ class Robot:
                              seeds=seeds)
 
     def _line(self, start: np.ndarray, end: np.ndarray, quat: np.ndarray, steps: int = 4,
-              base_cost: float = GRASP_BASE_COST, loose_end: bool = False) -> list[np.ndarray] | None:
-        """IK configurations along the straight grip-site line start -> end (m), or None if any is unreachable;
-        base_cost: IK damping on the base (low lets the base back away, e.g. drawing an object off a shelf)."""
+              base_cost: float = GRASP_BASE_COST, loose_end: bool = False,
+              partial: bool = False) -> list[np.ndarray] | None:
+        """IK configurations along the straight grip-site line start -> end (m), or None if any is unreachable
+        (with `partial`, those up to the last reachable point instead); base_cost: IK damping on the base (low
+        lets the base back away, e.g. drawing an object off a shelf). Points before the end are solved within
+        WAYPOINT_TOL, the end exactly unless `loose_end`."""
         q = self.controller.target.copy()
         path = []
         for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
@@ -86,7 +88,7 @@ class Robot:
                                                             "orientation_tol": WAYPOINT_TOL[1]}
             result = self.ik.solve(q, start + s * (end - start), quat, base_cost=base_cost, seeds=False, **loose)
             if not result.converged:
-                return None
+                return path if partial else None
             q = result.q
             path.append(q)
         return path
@@ -131,10 +133,9 @@ class Robot:
         reach, short = 0.0, False
         if self.held is not None:  # the held object sticks out past the base
             size = CATALOG[self.world.layout.objects[self.world.object_index(self.held)].cls].size
-            position, quat = self.world.object_pose(self.held)
-            rotation = np.zeros(9)
-            mujoco.mju_quat2Mat(rotation, quat)
-            half_height = float(np.abs(rotation.reshape(3, 3)[2]) @ np.asarray(size) / 2)  # tilted or not
+            body = self.world.object_body_ids[self.world.object_index(self.held)]
+            position = self.world.object_pose(self.held)[0]
+            half_height = float(np.abs(self.world.data.xmat[body].reshape(3, 3)[2]) @ np.asarray(size) / 2)
             reach = float(np.linalg.norm(position[:2] - self.controller.q()[:2]) + np.linalg.norm(size[:2]) / 2
                           + CLEARANCE)
             short = surface_z is not None and position[2] - half_height < surface_z + PASS_OVER
@@ -201,18 +202,10 @@ class Robot:
         the arm's reach, the hand stays at the last reachable point."""
         x, y, yaw = self.controller.target[:3]
         point = np.array([x + CARRY_REACH * np.cos(yaw), y + CARRY_REACH * np.sin(yaw), CARRY_HEIGHT])
-        quat = self._held_quat()
         start = self.world.data.site("robot/grip").xpos.copy()
         steps = max(2, int(np.ceil(np.linalg.norm(point - start) / CARRY_STEP)))
-        q, path = self.controller.target.copy(), []
-        for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
-            result = self.ik.solve(q, start + s * (point - start), quat, base_cost=GRASP_BASE_COST, seeds=False,
-                                   position_tol=WAYPOINT_TOL[0], orientation_tol=WAYPOINT_TOL[1])
-            if not result.converged:
-                break
-            q = result.q
-            path.append(q)
-        return path or [self.controller.target.copy()]
+        return self._line(start, point, self._held_quat(), steps, loose_end=True, partial=True) or [
+            self.controller.target.copy()]
 
     # --- pick --------------------------------------------------------------------------------------------
     def pick(self, name: str, node: str | None = None) -> SkillResult:
