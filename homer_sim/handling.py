@@ -18,6 +18,7 @@ from homer_sim.avatar import AvatarError, compose, relative_pose
 from homer_sim.catalog import CATALOG
 from homer_sim.errors import PhysicsError
 from homer_sim.graph import INSIDE, ON
+from homer_sim.placement import yaw_quat
 from homer_sim.spots import PlacementError, Spot
 
 log = logging.getLogger(__name__)
@@ -157,7 +158,7 @@ class Handling:
             spot = self.spots.free_spot(name, furniture, index, self.rng, exclude)
             if spot is not None:
                 log.debug("%s: pushed back into %s so the door closes", name, furniture)
-                self.world.set_object_pose(name, spot.pos, (math.cos(spot.yaw / 2), 0.0, 0.0, math.sin(spot.yaw / 2)))
+                self.world.set_object_pose(name, spot.pos, yaw_quat(spot.yaw))
                 self.settle()
                 return
         raise blocked
@@ -216,7 +217,7 @@ class Handling:
         riders = self.avatar.riders.pop(name, [])
         pos, quat = self.world.object_pose(name)
         rel = {r: relative_pose(pos, quat, *self.world.object_pose(r)) for r in riders}
-        target_quat = np.array([math.cos(spot.yaw / 2), 0.0, 0.0, math.sin(spot.yaw / 2)])
+        target_quat = np.array(yaw_quat(spot.yaw))
         for item in [name, *riders]:
             self.avatar.unweld(item)
             self.avatar.set_collisions(item, True)

@@ -64,12 +64,16 @@ def _overlaps(a: tuple, b: tuple, gap: float) -> bool:
     return a[0] < b[2] + gap and b[0] < a[2] + gap and a[1] < b[3] + gap and b[1] < a[3] + gap
 
 
+def lengthwise(f: Furniture, place: Place, cls: ObjectClass) -> bool:
+    """Whether an object on `place` of `f` stands lengthwise (its x front to back, like books on a shelf):
+    a long object inside a cabinet, which keeps its narrow side to the open front and leaves room beside it."""
+    return f.kind == "cabinet" and place.relation == INSIDE and cls.size[0] > cls.size[1]
+
+
 def stored_yaw(f: Furniture, place: Place, cls: ObjectClass) -> float:
-    """Yaw (rad, world) of an object put on `place` of `f`: its x along the furniture's width, except inside a
-    cabinet, where a long object stands lengthwise (its x front to back, like books on a shelf), which keeps
-    its narrow side to the open front and leaves room beside it."""
-    lengthwise = f.kind == "cabinet" and place.relation == INSIDE and cls.size[0] > cls.size[1]
-    return f.yaw + (0.0 if lengthwise else math.pi / 2)
+    """Yaw (rad, world) of an object put on `place` of `f`: its x along the furniture's width, or front to
+    back if it stands `lengthwise`."""
+    return f.yaw + (0.0 if lengthwise(f, place, cls) else math.pi / 2)
 
 
 def pack_spot(place: Place, cls: ObjectClass, taken: list[tuple], step: float = 0.01,
@@ -139,16 +143,16 @@ def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
         f = furniture[decl.parent]
         for k, place in _candidate_places(f, decl):
             spots = taken.setdefault((f.name, k), list(_obstacles_on(layout, f)))
-            yaw = stored_yaw(f, place, cls)
+            long = lengthwise(f, place, cls)
             # in a cabinet the first declared (the everyday things) stand front and centre, where a hand reaches
             # past the open door and the side walls
-            spot = pack_spot(place, cls, spots, lengthwise=yaw == f.yaw, centre_first=f.kind == "cabinet")
+            spot = pack_spot(place, cls, spots, lengthwise=long, centre_first=f.kind == "cabinet")
             if spot is None and f.kind == "cabinet":  # what does not fit beside them packs from the side
-                spot = pack_spot(place, cls, spots, lengthwise=yaw == f.yaw)
+                spot = pack_spot(place, cls, spots, lengthwise=long)
             if spot is not None:
                 world = local_to_world(f, np.array([spot[0], spot[1], place.center[2]]), base_height(layout, f))
                 pos = (float(world[0]), float(world[1]), float(world[2] + cls.size[2] / 2 + SPAWN_LIFT))
-                poses[decl.name] = StartPose(decl.name, pos, yaw_quat(yaw))
+                poses[decl.name] = StartPose(decl.name, pos, yaw_quat(stored_yaw(f, place, cls)))
                 break
         else:
             raise LayoutError(f"{decl.name}: does not fit on any place of {f.name} (size {cls.size} m)")

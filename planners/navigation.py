@@ -68,7 +68,8 @@ class Navigator:
             raise NavigationError(f"{node!r} is not furniture; known: {', '.join(sorted(self.furniture))}")
         f = self.furniture[node]
         centre = np.array(f.pos)
-        rotation = np.column_stack([self.front_normal(node), [-self.front_normal(node)[1], self.front_normal(node)[0]]])
+        front_normal = self.front_normal(node)
+        rotation = np.column_stack([front_normal, [-front_normal[1], front_normal[0]]])  # furniture frame -> world
         sides = sorted(access_sides(f), key=lambda side: side[1] - float(
             np.dot(rotation.T @ (np.asarray(target_xy) - centre), side[0])))
         obstacles = self.open_part_rects()
