@@ -98,3 +98,22 @@ def test_carried_objects_are_outside_while_the_person_is(executor: Executor) -> 
     assert executor.observe().parent_of("keys") == "bench"
     executor.put("clothes_jacket", "dresser", INSIDE)
     assert executor.observe().relation_of("clothes_jacket") == "INSIDE"
+
+
+def test_an_object_in_a_doors_way_is_set_aside_or_pushed_back_in(executor: Executor) -> None:
+    world = executor.world
+    executor.start_day(np.random.default_rng(0))
+    in_the_swing = (1.3, 0.85, 0.062)  # on the floor in front of the cupboard, 0.45 m from its door's hinge
+    world.set_object_pose("drinking_glass", in_the_swing)
+    world.settle()
+    executor.open("cupboard")  # the person moves the glass out of the way first, on the floor nearby
+    assert world.openness("cupboard/door") > 0.9
+    graph = executor.observe()
+    assert (graph.parent_of("drinking_glass"), graph.relation_of("drinking_glass")) == ("dining_room", "INSIDE")
+    assert np.linalg.norm(world.object_pose("drinking_glass")[0][:2] - in_the_swing[:2]) > 0.05
+    world.set_object_pose("drinking_glass", in_the_swing)  # fallen out while the door stood open
+    world.settle()
+    executor.close("cupboard")  # the person puts it back inside first
+    assert world.openness("cupboard/door") < 0.05
+    graph = executor.observe()
+    assert (graph.parent_of("drinking_glass"), graph.relation_of("drinking_glass")) == ("cupboard", "INSIDE")
