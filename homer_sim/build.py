@@ -1,6 +1,6 @@
 """Compile a declarative Layout to a MuJoCo model with MjSpec.
 
-Naming (the one place MJCF names are made; `homer_sim.names` parses them back):
+Naming (the one place MJCF names are made; `homer_sim.observe` and `homer_sim.world` read them back):
 - a room's floor: world geom `<room>/floor`; walls: world geoms `wall/<k>`;
 - furniture with doors or drawers: body `<furniture>` with geoms `<furniture>/<box>`; a door or drawer: body
   and joint `<furniture>/<part>`, its handle geom and site `<furniture>/<part>/handle`;
@@ -88,13 +88,11 @@ def _add_floors_and_walls(spec: mujoco.MjSpec, layout: Layout) -> None:
         geom.group = FLOOR_GROUP
         geom.friction = FURNITURE_FRICTION
         geom.solref = CONTACT_SOLREF
-    by_wall: dict[str, int] = {}
     for k, (x0, y0, x1, y1) in enumerate(wall_segments(layout)):
         h = layout.wall_height
         spec.worldbody.add_geom(name=f"wall/{k}", type=mujoco.mjtGeom.mjGEOM_BOX,
                                 pos=((x0 + x1) / 2, (y0 + y1) / 2, h / 2),
                                 size=((x1 - x0) / 2, (y1 - y0) / 2, h / 2), rgba=WALL_RGBA)
-        by_wall[f"wall/{k}"] = k
     spec.worldbody.add_light(name="sun", pos=(5, 4, 6), dir=(0, 0, -1), type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL)
 
 
