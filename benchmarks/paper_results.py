@@ -100,20 +100,24 @@ def pretrained(dataset: Dataset, house: str, folder: Path) -> Path:
 
 
 def plan(dataset: Dataset, experiments: list[str], households: list[str], methods: list[str]) -> list[tuple]:
-    """(key, household, method, days, pretrain?) of every run, in order."""
+    """(key, household, method, days, pretrain?) of every run, in order: one experiment for every household
+    before the next, so that a partial run already gives whole tables."""
     runs = []
-    for house in households:
-        n_train = len(dataset.day_indices(house, "train"))
-        if "main" in experiments:
-            runs += [(f"main/{house}/{m}/{n_train}", house, m, None, False) for m in methods]
-        if "ablation" in experiments:
-            runs += [(f"main/{house}/{m}/{n_train}", house, m, None, False) for m in ABLATIONS]
-        if "days" in experiments:
-            runs += [(f"days/{house}/{m}/{d}", house, m, d, False) for d in DAY_COUNTS if d < n_train
-                     for m in DAYS_METHODS]
-        if "pretrain" in experiments:
-            runs += [(f"pretrain/{house}/gnn/{d}", house, "gnn", d, True) for d in (*DAY_COUNTS, n_train)
-                     if d <= n_train]
+    n_train = {house: len(dataset.day_indices(house, "train")) for house in households}
+    for experiment in EXPERIMENTS:
+        if experiment not in experiments:
+            continue
+        for house in households:
+            n = n_train[house]
+            if experiment == "main":
+                runs += [(f"main/{house}/{m}/{n}", house, m, None, False) for m in methods]
+            elif experiment == "ablation":
+                runs += [(f"main/{house}/{m}/{n}", house, m, None, False) for m in ABLATIONS]
+            elif experiment == "days":
+                runs += [(f"days/{house}/{m}/{d}", house, m, d, False) for d in DAY_COUNTS if d < n
+                         for m in DAYS_METHODS]
+            else:
+                runs += [(f"pretrain/{house}/gnn/{d}", house, "gnn", d, True) for d in (*DAY_COUNTS, n) if d <= n]
     return list(dict.fromkeys(runs))
 
 
