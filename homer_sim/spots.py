@@ -8,6 +8,7 @@ their current physical poses (never from the layout's declared ones).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -148,35 +149,40 @@ class Spots:
     def free_spot(self, name: str, node: str, place_index: int, rng: np.random.Generator,
                   exclude: set[int]) -> Spot | None:
         """A random free spot for object `name` on a place of furniture `node` (drawers assumed open)."""
+        return next(self.free_spots(name, node, place_index, rng, exclude), None)
+
+    def free_spots(self, name: str, node: str, place_index: int, rng: np.random.Generator,
+                   exclude: set[int]) -> Iterator[Spot]:
+        """Every free spot for object `name` on a place of furniture `node` (drawers assumed open): PLACE_TRIES
+        random ones, then a scan on a 2 cm grid (so a crowded shelf with one gap left still finds it), then, for
+        cloth, spots on top of what is there."""
         f = self.furniture[node]
         place = self._places[node][place_index]
         world_place = place_world(self.layout, f, place, opened=place.part is not None)
         cls = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls]
         size = cls.size
         if size[2] > place.clearance - 0.005:
-            return None
+            return
         yaw = stored_yaw(f, place, cls)
         half_x, half_y = _rotated_half(size, yaw)
         x0, y0, x1, y1 = world_place["rect"]
         if x1 - x0 < 2 * half_x or y1 - y0 < 2 * half_y:
-            return None
+            return
         z = world_place["z"]
         boxes = self.footprints(exclude)
         near = boxes[(boxes[:, 4] > z - 0.05) & (boxes[:, 4] < z + place.clearance)]
         candidates = [(rng.uniform(x0 + half_x, x1 - half_x), rng.uniform(y0 + half_y, y1 - half_y))
                       for _ in range(PLACE_TRIES)]
-        # then a systematic scan, so a crowded shelf with one gap left still finds it
         candidates += [(x, y) for x in np.arange(x0 + half_x, x1 - half_x + 1e-9, 0.02)
                        for y in np.arange(y0 + half_y, y1 - half_y + 1e-9, 0.02)]
         for x, y in candidates:
             if not _overlaps_any(near, (x - half_x, y - half_y, x + half_x, y + half_y)):
-                return Spot((float(x), float(y), z + size[2] / 2 + DROP_LIFT), yaw, node, place_index)
-        if CATALOG[self.layout.objects[self.world.object_index(name)].cls].family == "cloth":
+                yield Spot((float(x), float(y), z + size[2] / 2 + DROP_LIFT), yaw, node, place_index)
+        if cls.family == "cloth":
             for x, y in candidates[:PLACE_TRIES]:  # soft things pile up: on top of what is there
                 landing = self.landing_z(name, (x, y), z + place.clearance)
                 if landing + size[2] / 2 <= z + place.clearance:
-                    return Spot((float(x), float(y), landing), yaw, node, place_index)
-        return None
+                    yield Spot((float(x), float(y), landing), yaw, node, place_index)
 
     def floor_spot(self, name: str, room: str, near: tuple[float, float], rng: np.random.Generator,
                    exclude: set[int]) -> Spot:

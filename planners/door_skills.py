@@ -9,6 +9,7 @@ free edge. Success is read back from the simulation: openness above OPEN_OK, or 
 from __future__ import annotations
 
 import logging
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
@@ -49,11 +50,23 @@ class PhaseFailed(Exception):
     """A phase could not be planned or executed; the message says where and why."""
 
 
+@dataclass(frozen=True)
+class Held:
+    """An object in the hand: its geoms, its free joint's qpos address, and its pose in the grip site's frame
+    (position m, shape (3,); rotation, shape (3, 3)); it moves with the hand in clearance checks."""
+
+    geoms: frozenset[int]
+    qpos_adr: int
+    position: np.ndarray
+    rotation: np.ndarray
+
+
 class ClearanceCheck:
     """Whether a robot configuration touches the apartment, on a scratch copy of the data (never the live one).
 
     Contacts of the fingers are ignored (they are meant to touch the part); every other robot geom must keep
-    MARGIN m from everything.
+    MARGIN m from everything. With a held object, the fingers are checked too, and the object must keep MARGIN
+    from everything but the robot.
     """
 
     MARGIN = 0.005  # m
@@ -65,22 +78,31 @@ class ClearanceCheck:
         self.qpos_adr = controller.qpos_adr
         robot = robot_geom_ids(world.model)
         fingers = {world.model.geom(PREFIX + n).id for n in ARM_GEOMS if n.startswith("finger")}
-        self.robot = set(robot.tolist())
+        self.robot = frozenset(robot.tolist())
         self.checked = self.robot - fingers
+        self.grip = world.model.site(PREFIX + "grip").id
 
-    def clear(self, q: np.ndarray, articulation=None, value: float = 0.0) -> bool:
+    def clear(self, q: np.ndarray, articulation=None, value: float = 0.0, held: Held | None = None) -> bool:
         """True if configuration q (shape (13,)) keeps MARGIN from the apartment, with `articulation` (if
-        given) at joint value `value` (rad or m) and everything else where it is now."""
+        given) at joint value `value` (rad or m), `held` (if given) in the hand, and everything else where it
+        is now."""
         d = self.scratch
         d.qpos[:] = self.world.data.qpos
         d.qpos[self.qpos_adr] = q
         if articulation is not None:
             d.qpos[articulation.qpos_adr] = value
         mujoco.mj_kinematics(self.model, d)
+        robot, checked = self.robot, self.checked
+        if held is not None:
+            rotation = d.site_xmat[self.grip].reshape(3, 3)
+            d.qpos[held.qpos_adr:held.qpos_adr + 3] = d.site_xpos[self.grip] + rotation @ held.position
+            mujoco.mju_mat2Quat(d.qpos[held.qpos_adr + 3:held.qpos_adr + 7], (rotation @ held.rotation).ravel())
+            mujoco.mj_kinematics(self.model, d)
+            robot, checked = robot | held.geoms, robot | held.geoms
         mujoco.mj_collision(self.model, d)
         for c in d.contact[: d.ncon]:
             g1, g2 = int(c.geom1), int(c.geom2)
-            if (g1 in self.checked) != (g2 in self.checked) and not (g1 in self.robot and g2 in self.robot):
+            if (g1 in checked) != (g2 in checked) and not (g1 in robot and g2 in robot):
                 if c.dist < self.MARGIN:
                     return False
         return True

@@ -6,6 +6,7 @@ with success or a clear failure reason; a failed grasp is retried from the next 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,8 +18,15 @@ from homer_sim.spots import Spots
 from homer_sim.validate import ROBOT_RADIUS
 from planners.articulate import base_candidates
 from planners.control import Controller
-from planners.door_skills import ARC_BASE_COST, ClearanceCheck, PartMover
-from planners.grasps import Grasp, matrix_to_quat, shelf_grasps, top_grasps, ungraspable_reason
+from planners.door_skills import ARC_BASE_COST, ClearanceCheck, Held, PartMover
+from planners.grasps import (
+    Grasp,
+    matrix_to_quat,
+    shelf_grasps,
+    side_grasps,
+    top_grasps,
+    ungraspable_reason,
+)
 from planners.ik import IKSolver
 from planners.navigation import CLEARANCE, NavigationError, Navigator
 
@@ -40,6 +48,13 @@ ENTRY_OUT = 0.12  # m: a grasp inside furniture is entered from this far in fron
 ENTRY_STEP = 0.05  # m between checked configurations on the way in
 PASS_OVER = 0.03  # m between a carried object and a surface it is carried over before it is put down
 PULL_BASE_COST = 0.1  # IK damping on the base while drawing an object out: the base backs away
+LEAD_HEIGHTS = (0.15, 0.3)  # m above a grasp's entry point the arm may first swing to, then come down
+SWING_STEP = 0.1  # rad between checked configurations of a joint-space swing
+LEVEL_HAND = 0.7  # horizontal part of the grip x axis above which the hand counts as held level
+SHELF_SPOTS = 6  # free spots on a shelf tried for a place, nearest the front first,
+SHELF_SPOT_GAP = 0.05  # m apart at least
+EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
+RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to let go (inside a shelf)
 WAYPOINT_TOL = (0.015, np.deg2rad(5.0))  # m, rad: IK tolerance of a straight line's intermediate points (the end
 # point is exact); tight ones stall near joint limits on the way
 
@@ -136,8 +151,7 @@ class Robot:
             body = self.world.object_body_ids[self.world.object_index(self.held)]
             position = self.world.object_pose(self.held)[0]
             half_height = float(np.abs(self.world.data.xmat[body].reshape(3, 3)[2]) @ np.asarray(size) / 2)
-            reach = float(np.linalg.norm(position[:2] - self.controller.q()[:2]) + np.linalg.norm(size[:2]) / 2
-                          + CLEARANCE)
+            reach = self._held_reach()
             short = surface_z is not None and position[2] - half_height < surface_z + PASS_OVER
             if short:  # the straight carry line stalled low: one IK solution lifts it clear, if there is one
                 grip = self.world.data.site("robot/grip").xpos
@@ -173,23 +187,52 @@ class Robot:
             if path is None or self._checked_line(path[-1], [above, grasp.position, grasp.position + np.array(
                     [0.0, 0.0, SIDE_LIFT])], quat) is None:
                 continue
+            lead = self._lead_in(start.q, above + entry * pull, quat)
+            if lead is None:
+                continue
             self.retract()
             self.navigator.drive_to(base, self.tuck)
-            path_in = [start.q, *path]
+            path_in = [*lead, *path]
             for q_in in path_in:
                 q_in[:3] = self.controller.target[:3]  # where the base really stopped
             return path_in
         return None
 
-    def _checked_line(self, q: np.ndarray, points: list[np.ndarray], quat: np.ndarray) -> list[np.ndarray] | None:
+    def _lead_in(self, q: np.ndarray, point: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
+        """The way from the raised arm to configuration q (shape (13,), the grip site at `point`, m): q alone if
+        the joint-space swing there touches nothing, else down onto `point` from a LEAD_HEIGHTS m higher one
+        (the swing passes over what stands on a table); None if neither is clear."""
+        if self._swing_clear(self.raised(q[3]), q):
+            return [q]
+        for height in LEAD_HEIGHTS:
+            high = point + np.array([0.0, 0.0, height])
+            via = self.ik.solve(q, high, quat, base_cost=ARC_BASE_COST, seeds=False)
+            if not via.converged or not self._swing_clear(self.raised(q[3]), via.q):
+                continue
+            down = self._checked_line(via.q, [high, point], quat)
+            if down is not None:
+                return [via.q, *down]
+        return None
+
+    def _swing_clear(self, q_from: np.ndarray, q_to: np.ndarray) -> bool:
+        """Whether the joint-space move q_from -> q_to (each shape (13,), base at q_to's) keeps the arm clear,
+        checked every SWING_STEP rad of the largest joint change."""
+        q_from = q_from.copy()
+        q_from[:3] = q_to[:3]
+        steps = max(1, int(np.ceil(np.max(np.abs(q_to[3:11] - q_from[3:11])) / SWING_STEP)))
+        return all(self.clearance.clear(q_from + s * (q_to - q_from)) for s in np.linspace(0.0, 1.0, steps + 1)[1:])
+
+    def _checked_line(self, q: np.ndarray, points: list[np.ndarray], quat: np.ndarray, held: Held | None = None
+                      ) -> list[np.ndarray] | None:
         """IK configurations (base held, each shape (13,)) from q through grip-site points (m, each shape (3,)),
-        ENTRY_STEP m apart on the straight lines between them; None if one is unreachable or touches anything."""
+        ENTRY_STEP m apart on the straight lines between them; None if one is unreachable or touches anything
+        (`held`, an object in the hand, included)."""
         path = []
         for a, b in zip(points[:-1], points[1:], strict=False):
             steps = max(1, int(np.ceil(np.linalg.norm(b - a) / ENTRY_STEP)))
             for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
                 result = self.ik.solve(q, a + s * (b - a), quat, base_cost=ARC_BASE_COST, seeds=False)
-                if not result.converged or not self.clearance.clear(result.q):
+                if not result.converged or not self.clearance.clear(result.q, held=held):
                     return None
                 q = result.q
                 path.append(q)
@@ -208,8 +251,10 @@ class Robot:
             self.controller.target.copy()]
 
     # --- pick --------------------------------------------------------------------------------------------
-    def pick(self, name: str, node: str | None = None) -> SkillResult:
-        """Grasp object `name` and lift it LIFT m; `node` (the furniture it is on or in) is where to stand."""
+    def pick(self, name: str, node: str | None = None, into: str | None = None) -> SkillResult:
+        """Grasp object `name` and lift it LIFT m; `node` (the furniture it is on or in) is where to stand.
+        `into`: where it goes next; a cabinet's shelf takes an object held from the side (its hand enters the
+        compartment level), so from a table it is then grasped from the side first."""
         cls = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls]
         reason = ungraspable_reason(cls)
         if reason is not None:
@@ -221,6 +266,21 @@ class Robot:
         inside = graph.relation_of(name) == RELATION_NAMES[INSIDE] and furniture is not None
         if inside and furniture.kind == "cabinet":  # on a shelf: from the front, the base placed for each grasp
             return self._pick_from_shelf(name, node, cls, position, quat)
+        side_failures: list[str] = []
+        if into is not None and furniture is not None and self._shelves(into, None):
+            try:  # from the side nearest where the robot would stand
+                stand = np.array(self.navigator.stand_pose(node, tuple(position[:2]))[:2])
+            except NavigationError as error:
+                return SkillResult(False, f"{name}: {error}")
+            toward = (stand - position[:2]) / max(float(np.linalg.norm(stand - position[:2])), 1e-9)
+            yaw = 2.0 * math.atan2(quat[3], quat[0])
+            axes = [np.array([math.cos(yaw + a), math.sin(yaw + a)]) for a in np.arange(4) * math.pi / 2]
+            for out in sorted(axes, key=lambda a: -float(a @ toward)):  # the object's sides, nearest side first
+                if out @ toward > -0.5:
+                    outcome = self._pick_from_shelf(name, node, cls, position, quat, out)
+                    if outcome.success:
+                        return outcome
+                    side_failures.append(outcome.reason.removeprefix(f"{name}: "))
         try:
             if furniture is None:  # on the floor of a room
                 goal = self.navigator.stand_near(tuple(position[:2]))
@@ -231,7 +291,7 @@ class Robot:
         except NavigationError as error:
             return SkillResult(False, f"{name}: {error}")
         grasps = top_grasps(cls, position, quat, self.controller.q()[:2])
-        failures = []
+        failures = side_failures
         for grasp in grasps:
             outcome = self._try_grasp(name, grasp)
             if outcome.success:
@@ -240,13 +300,20 @@ class Robot:
             failures.append(f"{grasp.kind}: {outcome.reason}")
         return SkillResult(False, f"{name}: every grasp failed ({'; '.join(failures)})")
 
-    def _pick_from_shelf(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray) -> SkillResult:
+    def _pick_from_shelf(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
+                         out: np.ndarray | None = None) -> SkillResult:
         """Pick `name` from a shelf inside cabinet `node`: each grasp of `shelf_grasps` in turn, from a base
-        pose where the arm clears the compartment; the object lifted SIDE_LIFT m, drawn out, then raised."""
+        pose where the arm clears the compartment; the object lifted SIDE_LIFT m, drawn out, then raised.
+        With `out` (a horizontal unit vector, shape (2,)), from an open top instead: side grasps only, approached
+        against `out`, the fingers as deep on the object as they reach."""
         furniture = self.navigator.furniture[node]
-        out = self.navigator.front_normal(node)
-        front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
-        grasps = shelf_grasps(cls, position, quat, out, front)
+        if out is None:
+            out = self.navigator.front_normal(node)
+            front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
+            grasps = shelf_grasps(cls, position, quat, out, front)
+        else:
+            front = -np.inf
+            grasps = side_grasps(cls, position, quat, out, front)
         if not grasps:
             return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
         unreachable, failures = [], []
@@ -334,6 +401,9 @@ class Robot:
         if name is None:
             return SkillResult(False, "place: the robot holds nothing")
         exclude = {self.world.object_index(name)}
+        shelves = self._shelves(node, relation)
+        if shelves:
+            return self._place_in_shelf(name, node, shelves)
         spot = None
         for k, _ in self.spots.places_of(node, relation):
             spot = self.spots.free_spot(name, node, k, self.rng, exclude)
@@ -388,6 +458,123 @@ class Robot:
             return SkillResult(False, f"place: {name} ended {relation_seen} {parent}, not on {node}")
         return SkillResult(True)
 
+    def _shelves(self, node: str, relation: int | None) -> list[int]:
+        """Indices of the shelves inside cabinet `node` that a place with `relation` goes to (none elsewhere)."""
+        furniture = self.navigator.furniture.get(node)
+        if furniture is None or furniture.kind != "cabinet":
+            return []
+        return [k for k, p in self.spots.places_of(node, relation) if p.relation == INSIDE and p.part is None]
+
+    def _place_in_shelf(self, name: str, node: str, places: list[int]) -> SkillResult:
+        """Put the held object on a shelf inside cabinet `node` (`places`: its shelf indices), the reverse of
+        `_pick_from_shelf`: from a base pose where the object and the arm clear the cabinet and its contents, in
+        SIDE_LIFT m above a free spot (spots nearest the front first), down, release, and straight out."""
+        index = self.world.object_index(name)
+        size = np.asarray(CATALOG[self.world.layout.objects[index].cls].size)
+        furniture = self.navigator.furniture[node]
+        out = self.navigator.front_normal(node)
+        front = np.array(furniture.pos) + out * furniture.size[1] / 2
+        spots = [spot for k in places for spot in self.spots.free_spots(name, node, k, self.rng, {index})]
+        spots = _spread(sorted(spots, key=lambda spot: float(np.dot(front - spot.pos[:2], out))), SHELF_SPOT_GAP,
+                        SHELF_SPOTS)
+        if not spots:
+            return SkillResult(False, f"place: no free spot for {name} inside {node}")
+        carry = self._carry_path()
+        self.controller.move_through(carry)
+        posture, held = carry[-1], self._held(name)
+        grip = self.world.data.site("robot/grip")
+        now = grip.xmat.reshape(3, 3)
+        # turned about the vertical: a hand held level points into the shelf; one pointing down keeps its turn
+        # relative to the base, the base facing the shelf
+        level = np.linalg.norm(now[:2, 0]) > LEVEL_HAND
+        turn = math.atan2(-out[1], -out[0]) - (math.atan2(now[1, 0], now[0, 0]) if level else
+                                               self.controller.target[2])
+        rotation = np.array([[math.cos(turn), -math.sin(turn), 0.0], [math.sin(turn), math.cos(turn), 0.0],
+                             [0.0, 0.0, 1.0]]) @ now
+        quat = matrix_to_quat(rotation)
+        up, pull = np.array([0.0, 0.0, 1.0]), np.array([out[0], out[1], 0.0])
+        clear_out = np.linalg.norm(size) / 2 + ENTRY_OUT  # the object's centre this far out of the front: all out
+        for spot in spots:
+            release = np.array(spot.pos) + np.array([0.0, 0.0, 0.01]) - rotation @ held.position
+            outside = release + (float(np.dot(front - release[:2], out)) + clear_out) * pull
+            points = [outside + SIDE_LIFT * up, release + SIDE_LIFT * up, release]
+            path_in = self._drive_for(points, rotation, posture, held)
+            if path_in is None:
+                continue
+            self._ease_to(path_in[0], quat)
+            if float(np.mean(self.controller.q()[-2:])) < MIN_HELD_OPENING:
+                self.held = None
+                self.retract()
+                return SkillResult(False, f"place: {name} fell out of the hand on the way into {node}")
+            now = self._held(name)  # the object may have turned in the fingers on the way: aim it again
+            again = np.array(spot.pos) + np.array([0.0, 0.0, 0.01]) - rotation @ now.position
+            replanned = self._checked_line(self.controller.target, [points[0], again + SIDE_LIFT * up, again],
+                                           quat, now)
+            slip = float(np.linalg.norm(now.position - held.position))
+            if replanned is not None:
+                path_in, release = [self.controller.target.copy(), *replanned], again
+            elif slip > CARRY_SLIP:  # still held, but no longer as planned: the caller puts it down elsewhere
+                return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand on the way into "
+                                          f"{node} and no longer goes in clear")
+            self.controller.move_through(path_in[1:])
+            self.controller.settle(0.003)
+            self.controller.set_grip(float(np.mean(self.controller.q()[-2:])) + RELEASE_OPENING, seconds=0.4)
+            self.held = None
+            retreat = self._line(release, outside, quat, steps=4, loose_end=True)
+            if retreat is not None:
+                self.controller.move_through(retreat)
+            self.retract()
+            self.world.settle(max_seconds=2.0)
+            graph = self.observer.update()
+            parent, relation_seen = graph.parent_of(name), graph.relation_of(name)
+            if parent != node or relation_seen != RELATION_NAMES[INSIDE]:
+                return SkillResult(False, f"place: {name} ended {relation_seen} {parent}, not inside {node}")
+            return SkillResult(True)
+        return SkillResult(False, f"place: no free base pose puts {name} into {node} without it or the arm "
+                                  f"touching {node} or its contents ({len(spots)} spots tried)")
+
+    def _ease_to(self, q: np.ndarray, quat: np.ndarray) -> None:
+        """Move a held object to configuration q (shape (13,), grip orientation `quat`): along a straight grip
+        line as far as it is reachable, the rest in joint space, slowly (a quick swing turns a long object held
+        by one end in the fingers)."""
+        start = self.world.data.site("robot/grip").xpos.copy()
+        end = self.ik.grip_pose(q)[0]
+        steps = max(2, int(np.ceil(np.linalg.norm(end - start) / CARRY_STEP)))
+        lead = self._line(start, end, quat, steps, base_cost=ARC_BASE_COST, loose_end=True, partial=True)
+        if lead:
+            self.controller.move_through(lead)
+        self.controller.move_through([q], duration=EASE_SLOWDOWN * self.controller.duration(self.controller.target, q))
+        self.controller.settle(0.003)
+
+    def _drive_for(self, points: list[np.ndarray], rotation: np.ndarray, posture: np.ndarray, held: Held
+                   ) -> list[np.ndarray] | None:
+        """Drive, holding `held` in `posture` (shape (13,)), to a free base pose from which the grip site follows
+        `points` (m, each shape (3,)) at `rotation` (shape (3, 3)) with the object and the arm clear of the
+        apartment; returns the configurations (each shape (13,)) along them, or None (the robot stays)."""
+        quat = matrix_to_quat(rotation)
+        reach = self._held_reach()
+        obstacles = self.navigator.open_part_rects()
+        for base in base_candidates(points[-1], rotation, self.controller.q()[:2]):
+            if not self.navigator.plan.disk_is_free(base[0], base[1], ROBOT_RADIUS + CLEARANCE, obstacles):
+                continue
+            q = posture.copy()
+            q[:3] = base
+            start = self.ik.solve(q, points[0], quat, base_cost=ARC_BASE_COST)
+            if not start.converged or not self.clearance.clear(start.q, held=held):
+                continue
+            path = self._checked_line(start.q, points, quat, held)
+            if path is None:
+                continue
+            try:
+                self.navigator.drive_to(base, posture, reach)
+            except NavigationError:
+                continue
+            path = [start.q, *path]
+            for q_in in path:
+                q_in[:3] = self.controller.target[:3]  # where the base really stopped
+            return path
+        return None
+
     # --- doors and drawers ---------------------------------------------------------------------------------
     def open_articulation(self, name: str) -> SkillResult:
         """Open door or drawer `name` (`<furniture>/<part>`, or a furniture with one part) above openness 0.9,
@@ -420,9 +607,38 @@ class Robot:
         grip = self.world.data.site("robot/grip")
         return grip.xmat.reshape(3, 3).T @ (self.world.object_pose(name)[0] - grip.xpos)
 
+    def _held(self, name: str) -> Held:
+        """Object `name` as it sits in the hand now, for clearance checks of moves that carry it."""
+        model, index = self.world.model, self.world.object_index(name)
+        body = self.world.object_body_ids[index]
+        grip = self.world.data.site("robot/grip")
+        rotation = grip.xmat.reshape(3, 3)
+        return Held(frozenset(np.flatnonzero(model.geom_bodyid == body).tolist()),
+                    int(model.jnt_qposadr[model.body_jntadr[body]]), self._held_offset(name),
+                    rotation.T @ self.world.data.xmat[body].reshape(3, 3))
+
+    def _held_reach(self) -> float:
+        """How far (m) the held object sticks out from the base centre, with CLEARANCE."""
+        index = self.world.object_index(self.held)
+        size = CATALOG[self.world.layout.objects[index].cls].size
+        position = self.world.object_pose(self.held)[0]
+        return float(np.linalg.norm(position[:2] - self.controller.q()[:2]) + np.linalg.norm(size[:2]) / 2
+                     + CLEARANCE)
+
     def _held_quat(self) -> np.ndarray:
         """The grip site's current orientation (wxyz), kept while carrying."""
         return matrix_to_quat(self.world.data.site("robot/grip").xmat.reshape(3, 3))
+
+
+def _spread(spots: list, gap: float, limit: int) -> list:
+    """Up to `limit` of `spots` (in their order), each at least `gap` m from the ones kept before it."""
+    kept = []
+    for spot in spots:
+        if all(math.dist(spot.pos[:2], other.pos[:2]) >= gap for other in kept):
+            kept.append(spot)
+            if len(kept) == limit:
+                break
+    return kept
 
 
 __all__ = ["Robot", "SkillResult", "ON", "INSIDE"]

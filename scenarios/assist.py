@@ -201,7 +201,7 @@ class Assistant:
                 picked[step.obj] = SkillResult(False, reason)
                 self._finish(by_obj[step.obj], -1, False, reason)
                 return None
-            return self.robot.pick(step.obj, step.node)
+            return self.robot.pick(step.obj, step.node, into=by_obj[step.obj].destination)
         if not picked.get(step.obj, SkillResult(False)).success:
             return None
         result = self.robot.place(step.target)

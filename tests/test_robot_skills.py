@@ -85,3 +85,29 @@ def test_robot_fetches_milk_from_the_fridge_to_the_dining_table() -> None:
     drift, name = _others_moved(world, before, "milk")
     assert drift < 0.02, f"{name} moved {drift * 100:.1f} cm"
     assert world.warnings() == 0 and not world.has_nan()
+
+
+def test_robot_puts_cereal_from_the_table_back_on_its_cupboard_shelf() -> None:
+    world = World(extras=[add_robot])
+    world.set_object_pose("food_cereal", (2.6, 2.0, 0.75 + 0.14 + 0.003))  # scenario set-up: left on the table
+    world.settle()
+    robot = Robot(world, np.random.default_rng(0))
+    graph = robot.observer.observe_all()
+    assert graph.parent_of("food_cereal") == "table_dining_room"
+    opened = robot.open_articulation("cupboard")
+    assert opened.success, opened.reason
+    before = world.object_positions()
+
+    picked = robot.pick("food_cereal", into="cupboard")  # from the side: the hand enters the shelf level
+    assert picked.success, picked.reason
+    placed = robot.place("cupboard", INSIDE)
+    assert placed.success, placed.reason
+
+    graph = robot.observer.update()
+    assert graph.parent_of("food_cereal") == "cupboard"
+    assert graph.relation_of("food_cereal") == RELATION_NAMES[INSIDE]
+    body = world.object_body_ids[world.object_index("food_cereal")]
+    assert world.data.xmat[body].reshape(3, 3)[2, 2] > 0.95  # standing, not dropped on its side
+    drift, name = _others_moved(world, before, "food_cereal")
+    assert drift < 0.02, f"{name} moved {drift * 100:.1f} cm"
+    assert world.warnings() == 0 and not world.has_nan()

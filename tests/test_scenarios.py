@@ -49,9 +49,6 @@ def test_the_robot_sets_the_table_before_breakfast(morning: tuple[MorningRun, Pa
     assert all(p == (TABLE, 1) for p in on_table.values()), f"at {before} min: {on_table}; failures: {failures}"
 
 
-@pytest.mark.xfail(strict=True, reason="known defect (issue 6): the robot cannot yet put an object INSIDE a cabinet "
-                   "shelf (it lowers from above, where the shelf above is in the way), so the person puts cereal and "
-                   "milk back; strict, so a fix shows up")
 def test_the_robot_clears_up_after_breakfast(morning: tuple[MorningRun, Path]) -> None:
     run, _ = morning
     last = run.assist.day.minutes[-1]
