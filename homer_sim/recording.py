@@ -37,6 +37,7 @@ from rerun.chunk import RrdReader
 
 from homer_sim.errors import HomerError
 from homer_sim.transforms import wxyz_to_xyzw
+from homer_sim.world import World
 
 if TYPE_CHECKING:
     from homer_sim.graph import SceneGraph
@@ -45,6 +46,7 @@ log = logging.getLogger(__name__)
 
 PHYSICS_TIMELINE = "physics_s"
 ROUTINE_TIMELINE = "routine"
+RECORD_PERIOD_S = 0.2  # physics s between pose rows of a RecordedWorld (5 Hz keeps a morning of robot work small)
 POSE_PERIOD_S = 1.0 / 30.0  # at most 30 pose updates per second of physics time
 MOVED_DISTANCE_M = 5e-4
 MOVED_ANGLE_RAD = np.deg2rad(0.5)
@@ -366,3 +368,22 @@ def read_recording(path: str | Path) -> dict[str, pa.Table]:
     for chunk in RrdReader(path).stream():
         tables[chunk.entity_path.lstrip("/")].append(pa.Table.from_batches([chunk.to_record_batch()]))
     return {entity: pa.concat_tables(parts, promote_options="permissive") for entity, parts in tables.items()}
+
+
+class RecordedWorld(World):
+    """A World that logs body poses to `recording` (when set) while physics steps, at most every
+    RECORD_PERIOD_S; `physics_offset` (s) is added to its clock, so runs that reset the world (one per trial)
+    follow each other on the `physics_s` timeline."""
+
+    recording: Recording | None = None
+    physics_offset = 0.0
+
+    def step(self, n: int = 1) -> None:
+        super().step(n)
+        if self.recording is not None and self.data.time - getattr(self, "_logged_s", -1.0) >= RECORD_PERIOD_S:
+            self._logged_s = float(self.data.time)
+            self.recording.log_body_poses(self.data, physics_time=self.physics_offset + self.data.time)
+
+    def reset_settled(self) -> None:
+        super().reset_settled()
+        self._logged_s = -1.0

@@ -22,6 +22,7 @@ import math
 import sys
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -225,31 +226,40 @@ def run_trial(world: World, cls: str, name: str, rng: np.random.Generator) -> Tr
 
 # --- the suite ------------------------------------------------------------------------------------------
 def run_suite(quick: bool = False, trials: int | None = None, seed: int = 0, progress: bool = True,
-              classes: dict[str, str] | None = None) -> dict:
+              classes: dict[str, str] | None = None, rrd: Path | None = None) -> dict:
     """Run `trials` picks of every included class (or of the quick subset, or of `classes`: {class:
     instance}) and summarise them as the `grasp-suite` JSON object. Each trial's random stream is seeded from
-    (seed, class name, trial number), so a class's trials do not depend on which other classes run."""
+    (seed, class name, trial number), so a class's trials do not depend on which other classes run. With `rrd`,
+    every trial is recorded there, one after the other on the physics clock, each outcome as an event."""
     from tqdm import tqdm
 
-    from homer_sim.world import World
+    from homer_sim.recording import RecordedWorld, Recording
     from planners.robot import add_robot
 
     included, excluded = suite_classes()
     chosen = classes if classes is not None else (quick_subset(included) if quick else included)
     trials = trials if trials is not None else (QUICK_TRIALS if quick else DEFAULT_TRIALS)
-    world = World(extras=[add_robot])
+    world = RecordedWorld(extras=[add_robot])
+    if rrd is not None:
+        world.recording = Recording(rrd)
+        world.recording.log_geometry(world.model, world.data)
     started = time.perf_counter()
     runs = [(cls, name, k) for cls, name in chosen.items() for k in range(trials)]
     results: list[TrialResult] = []
     for cls, name, k in tqdm(runs, desc="grasp suite", unit="trial", disable=not progress, file=sys.stderr):
         rng = np.random.default_rng([seed, _stable_hash(cls), k])
         outcome = run_trial(world, cls, name, rng)
-        log.info("%s trial %d: %s %s (lift %.3f m, slip %.4f m, %.1f s)", cls, k,
-                 "ok" if outcome.success else "FAILED", outcome.reason, outcome.lift_m, outcome.slip_m,
-                 outcome.wall_s)
+        text = (f"{cls} trial {k}: " + ("ok" if outcome.success else f"FAILED {outcome.reason}")
+                + f" (lift {outcome.lift_m:.3f} m, slip {outcome.slip_m:.4f} m, {outcome.wall_s:.1f} s)")
+        log.info(text)
+        if world.recording is not None:
+            world.recording.log_event(text, level="INFO" if outcome.success else "WARN")
+            world.physics_offset += float(world.data.time)
         results.append(outcome)
+    if world.recording is not None:
+        world.recording.close()
     return summarise(results, excluded, len(included) + len(excluded), time.perf_counter() - started,
-                     {"quick": quick, "seed": seed, "trials_per_class": trials})
+                     {"quick": quick, "seed": seed, "trials_per_class": trials, "rrd": str(rrd) if rrd else None})
 
 
 def _stable_hash(text: str) -> int:

@@ -21,6 +21,7 @@ from homer_sim.catalog import CATALOG
 from homer_sim.errors import HomerError
 from homer_sim.executor import DayLog, Executor
 from homer_sim.graph import INSIDE, ON, GraphError, SceneGraph
+from homer_sim.recording import RecordedWorld
 from homer_sim.world import World
 from planners.grasps import ungraspable_reason
 from planners.navigation import NavigationError
@@ -30,7 +31,6 @@ from planners.skills import Robot, SkillResult
 
 log = logging.getLogger(__name__)
 
-RECORD_PERIOD_S = 0.2  # physics seconds between pose rows while the robot acts (5 Hz keeps a morning small)
 PERSON_REACH = 0.7  # m from a furniture's footprint within which the person counts as using it
 FALLBACK_PLACES = 3  # places tried to put an object down after a failed place
 ROBOT_MIN_THRESHOLD = 0.5  # the robot acts on a move only when it is more likely than staying: robot time costs
@@ -71,18 +71,6 @@ class AssistLog:
     robot_minutes: float = 0.0
     day: DayLog | None = None
     error: str = ""  # why the person could not go on, if they could not (the run stops there)
-
-
-class RecordedWorld(World):
-    """A World that logs body poses to a recording while physics steps (at most every RECORD_PERIOD_S)."""
-
-    recording = None
-
-    def step(self, n: int = 1) -> None:
-        super().step(n)
-        if self.recording is not None and self.data.time - getattr(self, "_logged_s", -1.0) >= RECORD_PERIOD_S:
-            self._logged_s = float(self.data.time)
-            self.recording.log_body_poses(self.data)
 
 
 def containers_of(world: World) -> dict[str, tuple[str, ...]]:

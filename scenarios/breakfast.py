@@ -2,7 +2,7 @@
 without it.
 
 Stages (each timed): the cached dataset (generated on the first run), the cached predictor (trained on the first
-run), the unassisted reference replay, the assisted morning, and the recording. Relocations are scored as the paper
+run), the unassisted reference replay, the assisted run, and the recording. Relocations are scored as the paper
 scores them: a relocation the robot made at query minute t is correct when, in the reference, the person's first
 move of that object within (t, t + window] goes to the same destination.
 """
@@ -20,22 +20,24 @@ from homer_sim.executor import DayLog
 from homer_sim.seeding import day_streams
 from model.metrics import first_change
 from scenarios.assist import Assistant, AssistLog, run_assisted
-from scenarios.breakfast_data import HOUSEHOLD, DataSpec, check_meta, ensure_dataset, ensure_predictor, make_generator
+from scenarios.breakfast_data import DataSpec, check_meta, ensure_dataset, ensure_predictor, make_generator
 
 log = logging.getLogger(__name__)
 
 MORNING_END_MIN = 510  # 08:30: breakfast starts at 07:00 and is cleared away by about 07:50
 DEMO_DAY = ("test", 0)
+FULL_DAY_TRAIN_DAYS = 20  # a full assisted day's household: days to fit its predictor on (about 2 s each)
 
 
 @dataclass(frozen=True)
 class Morning:
-    """Which morning: the dataset split and day index, whether the person skips breakfast, when to stop (min)."""
+    """Which day: the dataset split and day index, whether the person skips breakfast, when to stop (routine
+    minute; None: the whole day)."""
 
     split: str = DEMO_DAY[0]
     index: int = DEMO_DAY[1]
     skip_breakfast: bool = False
-    end_min: int = MORNING_END_MIN
+    end_min: int | None = MORNING_END_MIN
 
 
 def reference_truth(reference: DayLog, minute: int, obj_index: int, window_steps: int) -> int:
@@ -53,8 +55,20 @@ def reference_truth(reference: DayLog, minute: int, obj_index: int, window_steps
     return int(destination[0, obj_index])
 
 
+def fetches(assist: AssistLog, reference: DayLog, rooms: set[str], window_min: int) -> dict:
+    """The person's fetches (in the reference day, each move of an object onto or into furniture) and how many of
+    them the robot had already done: a done relocation of that object to that place within `window_min` before."""
+    moves = [(minute, obj, to) for minute, obj, _, to, _ in reference.moves if to and to not in rooms]
+    done = [(o.minute, o.relocation.obj, o.relocation.destination) for o in assist.relocations if o.done]
+    helped = sum(any(obj == d_obj and to == d_to and minute - window_min <= d_minute <= minute
+                     for d_minute, d_obj, d_to in done) for minute, obj, to in moves)
+    return {"fetches": len(moves), "fetches_done_by_robot": helped,
+            "fetch_share": round(helped / len(moves), 3) if moves else None}
+
+
 def score(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...], window_steps: int) -> dict:
-    """Relocations planned, done, and correct against the reference, with each one's details."""
+    """Relocations planned, done, and correct against the reference (done but not correct: wrong), with each
+    one's details."""
     index = {n: i for i, n in enumerate(nodes)}
     rows = []
     for outcome in assist.relocations:
@@ -67,7 +81,9 @@ def score(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...], window_s
     skipped = [{"minute": m, "object": r.obj, "to": r.destination, "reason": why}
                for m, plan in assist.plans for r, why in plan.skipped]
     return {"relocations_planned": len(rows), "relocations_done": sum(r["done"] for r in rows),
-            "relocations_correct": sum(r["correct"] for r in rows), "relocations": rows, "skipped": skipped}
+            "relocations_correct": sum(r["correct"] for r in rows),
+            "relocations_wrong": sum(r["done"] and not r["correct"] for r in rows), "relocations": rows,
+            "skipped": skipped}
 
 
 @dataclass(frozen=True)
@@ -82,11 +98,18 @@ class MorningRun:
 
 def run_breakfast(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec | None = None) -> dict:
     """The whole demo; returns the summary (JSON-ready), with the wall seconds of every stage."""
-    return breakfast_morning(rrd, morning, spec).result
+    return assisted_run(rrd, morning, spec).result
 
 
-def breakfast_morning(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec | None = None) -> MorningRun:
-    """The whole demo (see `run_breakfast`), keeping the logs."""
+def run_full_day(rrd: Path | None, household: str) -> dict:
+    """One whole test day of `household` (one of the project's) with the robot helping; its summary."""
+    return assisted_run(rrd, Morning(end_min=None), DataSpec(train_days=FULL_DAY_TRAIN_DAYS, test_days=1,
+                                                             household=household)).result
+
+
+def assisted_run(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec | None = None) -> MorningRun:
+    """A day (or its morning) of `spec.household` with the robot helping, scored against the same day without it:
+    the cached dataset and predictor, the reference replay, the assisted run, the recording; keeps the logs."""
     spec = spec or DataSpec()
     stages: dict[str, float] = {}
     clock = time.perf_counter()
@@ -104,8 +127,8 @@ def breakfast_morning(rrd: Path | None, morning: Morning = Morning(), spec: Data
     predictor, trained_s = ensure_predictor(dataset, spec)
     stage("predictor (cached)" if trained_s == 0 else "predictor (trained)")
 
-    scripts = generator.scripts_for(HOUSEHOLD)
-    day = dataset.load(HOUSEHOLD, morning.split)[morning.index]
+    scripts = generator.scripts_for(spec.household)
+    day = dataset.load(spec.household, morning.split)[morning.index]
     entries = [] if morning.skip_breakfast else [tuple(e) for e in day.schedule]
     streams = lambda: day_streams(spec.seed, 0, morning.split, morning.index, day.seed)[1]  # noqa: E731
     reference = generator.executor.run_day(entries, scripts, streams(), end_min=morning.end_min)
@@ -120,12 +143,14 @@ def breakfast_morning(rrd: Path | None, morning: Morning = Morning(), spec: Data
     if recording is not None:
         recording.log_geometry(assistant.world.model, assistant.world.data)
     assist = run_assisted(assistant, entries, scripts, streams(), morning.end_min)
-    stage("assisted morning")
+    stage("assisted run")
     if recording is not None:
         recording.close()
         stage("recording")
     result = score(assist, reference, dataset.meta.nodes, spec.window_min // dataset.meta.grid_min)
-    result.update({"rrd": str(rrd) if rrd is not None else None, "household": HOUSEHOLD,
+    rooms = {n for n, c in zip(dataset.meta.nodes, dataset.meta.categories, strict=True) if c == "room"}
+    result.update(fetches(assist, reference, rooms, spec.window_min))
+    result.update({"rrd": str(rrd) if rrd is not None else None, "household": spec.household,
                    "day": f"{morning.split}/{morning.index}", "schedule": [list(e) for e in entries],
                    "method": spec.method, "threshold": assistant.threshold, "window_min": spec.window_min,
                    "robot_minutes": round(assist.robot_minutes, 2), "error": assist.error,
@@ -149,7 +174,11 @@ def format_summary(result: dict) -> list[str]:
         lines.append(f"  {clock(r['minute'])} {r['object']}: {r['from']} -> {r['to']} (p {r['confidence']:.2f}) "
                      f"{status}; {verdict if r['done'] else ''}".rstrip("; "))
     lines.append(f"relocations planned {result['relocations_planned']}, done {result['relocations_done']}, "
-                 f"correct {result['relocations_correct']}; robot busy {result['robot_minutes']:.1f} routine min")
+                 f"correct {result['relocations_correct']}, wrong {result['relocations_wrong']}; robot busy "
+                 f"{result['robot_minutes']:.1f} routine min")
+    if result["fetches"]:
+        lines.append(f"the robot had already done {result['fetches_done_by_robot']} of the person's "
+                     f"{result['fetches']} fetches ({100 * result['fetch_share']:.0f}%)")
     if result["error"]:
         lines.append(f"the run stopped early: {result['error']}")
     lines.append("stages: " + ", ".join(f"{k} {v:.1f} s" for k, v in result["stages_s"].items()))

@@ -34,13 +34,14 @@ CACHE_ENV = "HOMER_SIM_CACHE"
 
 @dataclass(frozen=True)
 class DataSpec:
-    """What the demo's dataset and predictor are: days per split, seed, method, window (min)."""
+    """What the demo's dataset and predictor are: days per split, seed, method, window (min), household."""
 
     train_days: int = 16
     test_days: int = 2
     seed: int = 0
     method: str = "markov"  # the graph network trains at ~50 s per epoch on 2 shared cores: too slow for a demo
     window_min: int = 30
+    household: str = HOUSEHOLD  # or one of the project's households (a full assisted day)
 
 
 BREAKFAST_SCRIPT = """\
@@ -129,31 +130,38 @@ def make_generator(recording=None):
 
 def data_folder(generator, spec: DataSpec) -> Path:
     """The cache folder for `spec`, named by a digest of what the days depend on."""
-    script = generator.scripts_for(HOUSEHOLD)["breakfast"]
-    raw = json.dumps([generator.world.layout.node_names(), BREAKFAST_HABIT, repr(script), __version__,
-                      spec.train_days, spec.test_days, spec.seed], default=str)
+    household = generator.households[spec.household]
+    raw = json.dumps([generator.world.layout.node_names(), household.habits, household.variants,
+                      repr(generator.scripts_for(spec.household)), __version__, spec.train_days, spec.test_days,
+                      spec.seed], default=str, sort_keys=True)
     digest = hashlib.sha1(raw.encode()).hexdigest()[:10]
-    return cache_root() / f"breakfast_{spec.train_days}+{spec.test_days}d_seed{spec.seed}_{digest}"
+    return cache_root() / f"{spec.household}_{spec.train_days}+{spec.test_days}d_seed{spec.seed}_{digest}"
+
+
+def household_index(generator, household: str) -> int:
+    """The household's position among the generator's households: `homer generate` seeds its days by it."""
+    return list(generator.households).index(household)
 
 
 def ensure_dataset(generator, spec: DataSpec) -> tuple[Dataset, float]:
-    """The breakfast dataset (generated where missing, day by day, resumable); returns it and the wall seconds
-    spent generating (0 when everything was cached)."""
+    """The dataset of `spec.household` (generated where missing, day by day, resumable); returns it and the wall
+    seconds spent generating (0 when everything was cached)."""
     folder = data_folder(generator, spec)
     started = time.perf_counter()
-    meta = generator.meta([HOUSEHOLD], {"generator": {"seed": spec.seed, "household": HOUSEHOLD,
-                                                      "homer_sim": __version__}})
+    house = spec.household
+    meta = generator.meta([house], {"generator": {"seed": spec.seed, "household": house, "homer_sim": __version__}})
+    h_index = household_index(generator, house) if house != HOUSEHOLD else 0
     if not (folder / "meta.json").is_file():
         write_meta(folder, meta)
     made = 0
     for split, count in (("train", spec.train_days), ("test", spec.test_days)):
         for index in range(count):
-            if day_path(folder, HOUSEHOLD, split, index).exists():
+            if day_path(folder, house, split, index).exists():
                 continue
-            day, info = generator.simulate(HOUSEHOLD, 0, split, index, spec.seed)
+            day, info = generator.simulate(house, h_index, split, index, spec.seed)
             write_day(folder, day)
             made += 1
-            log.info("breakfast dataset: %s day %d in %.1f s", split, index, info["wall_s"])
+            log.info("%s dataset: %s day %d in %.1f s", house, split, index, info["wall_s"])
     return Dataset(folder), (time.perf_counter() - started) if made else 0.0
 
 
@@ -162,9 +170,9 @@ def ensure_predictor(dataset: Dataset, spec: DataSpec, progress: bool = False):
     spent fitting (0 when cached)."""
     from model.evaluate import FitSpec, fit_tuned, split_days
 
-    fit, val = split_days(dataset.load(HOUSEHOLD, "train"))
+    fit, val = split_days(dataset.load(spec.household, "train"))
     fit_spec = FitSpec(spec.method, tuple(fit), tuple(val))
-    path = fit_spec.path(dataset.root / "checkpoints", HOUSEHOLD)
+    path = fit_spec.path(dataset.root / "checkpoints", spec.household)
     cached = path.is_file()
     started = time.perf_counter()
     predictor, info = fit_tuned(fit_spec, dataset.meta, spec.window_min, path, progress=progress)

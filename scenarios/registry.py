@@ -12,6 +12,8 @@ from pathlib import Path
 
 from homer_sim.errors import unknown_name
 
+FULL_DAY_HOUSEHOLDS = ("household_a", "household_b", "household_c", "household_d", "household_e")
+
 
 @dataclass(frozen=True)
 class Scenario:
@@ -35,6 +37,27 @@ def _breakfast_skipped(rrd: Path | None) -> dict:
     return run_breakfast(rrd, Morning(skip_breakfast=True))
 
 
+def _full_day(household: str) -> Callable[[Path | None], dict]:
+    def run(rrd: Path | None) -> dict:
+        from scenarios.breakfast import run_full_day
+
+        return run_full_day(rrd, household)
+
+    return run
+
+
+def _grasp_suite(rrd: Path | None) -> dict:
+    from planners.grasp_suite import run_suite
+
+    return run_suite(quick=True, progress=True, rrd=rrd)
+
+
+def _grasp_summary(result: dict) -> list[str]:
+    from planners.grasp_suite import format_table
+
+    return [format_table(result)]
+
+
 def _summary(result: dict) -> list[str]:
     from scenarios.breakfast import format_summary
 
@@ -46,6 +69,10 @@ SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
              _breakfast, _summary),
     Scenario("breakfast_skipped", "the same morning, but the person skips breakfast: the robot's help is put back "
              "once breakfast time has passed", _breakfast_skipped, _summary),
+    *(Scenario(f"day_{h}", f"one whole test day of {h} with the robot helping (its dataset and predictor made "
+               "and cached on the first run; long)", _full_day(h), _summary) for h in FULL_DAY_HOUSEHOLDS),
+    Scenario("grasp_suite", "the quick grasp suite: pick and hold each class in its home, every trial recorded",
+             _grasp_suite, _grasp_summary),
 )}
 
 

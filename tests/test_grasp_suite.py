@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from homer_sim.catalog import CATALOG
+from homer_sim.recording import read_recording
 from planners.grasp_suite import (
     MAX_SLIP,
     MIN_LIFT,
@@ -47,8 +50,8 @@ QUICK_MIN_OVERALL = 0.54  # regression floor: 6 of 11 measured with objects stor
 # the targets)
 
 
-def test_quick_subset_lifts_and_holds() -> None:
-    result = run_suite(quick=True, seed=0, progress=False)
+def test_quick_subset_lifts_and_holds(tmp_path: Path) -> None:
+    result = run_suite(quick=True, seed=0, progress=False, rrd=tmp_path / "grasps.rrd")
     assert result["trials"] == len(result["per_class"]) >= 8
     assert 0.0 <= result["overall"] <= 1.0
     assert result["overall"] >= QUICK_MIN_OVERALL, result["per_class"]
@@ -58,6 +61,11 @@ def test_quick_subset_lifts_and_holds() -> None:
         if entry["successes"]:
             assert entry["min_lift_m"] >= MIN_LIFT and entry["max_slip_m"] < MAX_SLIP, (cls, entry)
     assert result["per_class"]["trashcan"]["successes"] == 1  # a rim pinch of a bin on the floor
+    entities = read_recording(tmp_path / "grasps.rrd")  # every trial recorded, one after the other
+    events = [text for row in entities["events"].column("TextLog:text").to_pylist() if row for text in row]
+    assert {e.split(" trial ")[0] for e in events if " trial " in e} == set(result["per_class"]), events
+    times = entities["world/bodies/robot\\/base"].column("physics_s").drop_null().to_pylist()
+    assert times == sorted(times) and len(times) > 10 * result["trials"]
 
 
 @pytest.mark.slow

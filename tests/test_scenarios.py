@@ -1,4 +1,4 @@
-"""The breakfast scenario end to end: dataset, predictor, the assisted morning, the reference, the recording.
+"""The breakfast scenario end to end: dataset, predictor, the assisted run, the reference, the recording.
 
 One morning is run once for the module (a fresh cache folder: the dataset is generated and the predictor trained
 as on a new machine); every check reads the observed scene graph of the assisted day, never the plan.
@@ -11,8 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from homer_sim.executor import DayLog
+from homer_sim.households import load_households
 from homer_sim.recording import read_recording
-from scenarios.breakfast import MorningRun, breakfast_morning
+from planners.psi import Relocation
+from scenarios.assist import AssistLog, RelocationOutcome
+from scenarios.breakfast import MorningRun, assisted_run, fetches
 from scenarios.breakfast_data import DataSpec
 from scenarios.registry import SCENARIOS, get
 
@@ -27,7 +31,7 @@ def morning(tmp_path_factory: pytest.TempPathFactory) -> tuple[MorningRun, Path]
     with pytest.MonkeyPatch.context() as patch:
         patch.setenv("HOMER_SIM_CACHE", str(folder / "cache"))
         rrd = folder / "breakfast.rrd"
-        return breakfast_morning(rrd, spec=DataSpec(train_days=10, test_days=1)), rrd
+        return assisted_run(rrd, spec=DataSpec(train_days=10, test_days=1)), rrd
 
 
 def _where(run: MorningRun, minute: int) -> dict[str, tuple[str, int]]:
@@ -87,6 +91,25 @@ def test_the_recording_holds_the_scene_the_graphs_and_the_robot(morning: tuple[M
 
 
 def test_scenarios_are_registered_and_unknown_names_list_the_known_ones() -> None:
-    assert {"breakfast", "breakfast_skipped"} <= set(SCENARIOS)
+    days = {f"day_{h}" for h in load_households()}  # one full assisted day for each household
+    assert {"breakfast", "breakfast_skipped", "grasp_suite"} | days <= set(SCENARIOS)
     with pytest.raises(KeyError, match="breakfast"):
         get("brekfast")
+
+
+def test_fetch_share_counts_the_persons_moves_the_robot_had_already_made() -> None:
+    reference = DayLog(moves=[(420.0, "bowl", "cupboard", "table_dining_room", "ON"),
+                              (420.0, "milk", "fridge", "dining_room", "INSIDE"),  # in the hand: no fetch
+                              (430.0, "milk", "dining_room", "table_dining_room", "ON"),
+                              (480.0, "bowl", "table_dining_room", "sink_dining_room", "INSIDE"),
+                              (500.0, "spoon", "cupboard", "table_dining_room", "ON")])
+
+    def done(minute: int, obj: str, to: str, ok: bool = True) -> RelocationOutcome:
+        return RelocationOutcome(minute, Relocation(obj, "x", to, 1, 0.9), ok, "", to)
+
+    assist = AssistLog(relocations=[done(400, "bowl", "table_dining_room"),  # 20 min before: counts
+                                    done(380, "milk", "table_dining_room"),  # 50 min before: outside the window
+                                    done(470, "bowl", "cupboard"),  # not where the person took it
+                                    done(490, "spoon", "table_dining_room", ok=False)])  # failed
+    assert fetches(assist, reference, {"dining_room"}, 30) == {
+        "fetches": 4, "fetches_done_by_robot": 1, "fetch_share": 0.25}
