@@ -445,17 +445,23 @@ class Robot:
             return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
         self.controller.move_through(down)
         self.controller.settle(0.003)
-        self.controller.set_grip(0.05, seconds=0.4)
+        return self._let_go(name, node, 0.05, self._line(release, above, quat))
+
+    def _let_go(self, name: str, node: str, opening: float, away: list[np.ndarray] | None,
+                inside: bool = False) -> SkillResult:
+        """Open the fingers to `opening` m per finger, move the hand along `away` (configurations, if any), tuck,
+        let the world settle, and read where `name` ended: on or in `node` (inside it, with `inside`)."""
+        self.controller.set_grip(opening, seconds=0.4)
         self.held = None
-        up = self._line(release, above, quat)
-        if up is not None:
-            self.controller.move_through(up)
+        if away is not None:
+            self.controller.move_through(away)
         self.retract()
         self.world.settle(max_seconds=2.0)
         graph = self.observer.update()
-        parent, relation_seen = graph.parent_of(name), graph.relation_of(name)
-        if parent != node:
-            return SkillResult(False, f"place: {name} ended {relation_seen} {parent}, not on {node}")
+        parent, relation = graph.parent_of(name), graph.relation_of(name)
+        if parent != node or (inside and relation != RELATION_NAMES[INSIDE]):
+            return SkillResult(False, f"place: {name} ended {relation} {parent}, not {'inside' if inside else 'on'} "
+                                      f"{node}")
         return SkillResult(True)
 
     def _shelves(self, node: str, relation: int | None) -> list[int]:
@@ -518,18 +524,8 @@ class Robot:
                                           f"{node} and no longer goes in clear")
             self.controller.move_through(path_in[1:])
             self.controller.settle(0.003)
-            self.controller.set_grip(float(np.mean(self.controller.q()[-2:])) + RELEASE_OPENING, seconds=0.4)
-            self.held = None
-            retreat = self._line(release, outside, quat, steps=4, loose_end=True)
-            if retreat is not None:
-                self.controller.move_through(retreat)
-            self.retract()
-            self.world.settle(max_seconds=2.0)
-            graph = self.observer.update()
-            parent, relation_seen = graph.parent_of(name), graph.relation_of(name)
-            if parent != node or relation_seen != RELATION_NAMES[INSIDE]:
-                return SkillResult(False, f"place: {name} ended {relation_seen} {parent}, not inside {node}")
-            return SkillResult(True)
+            return self._let_go(name, node, float(np.mean(self.controller.q()[-2:])) + RELEASE_OPENING,
+                                self._line(release, outside, quat, steps=4, loose_end=True), inside=True)
         return SkillResult(False, f"place: no free base pose puts {name} into {node} without it or the arm "
                                   f"touching {node} or its contents ({len(spots)} spots tried)")
 
