@@ -419,8 +419,10 @@ class Robot:
         except NavigationError as error:
             return SkillResult(False, f"place: {error}")
         slip = float(np.linalg.norm(self._held_offset(name) - held_at))
-        if slip > CARRY_SLIP:
+        if slip > CARRY_SLIP and self._hand_empty():
             self.held = None
+            return SkillResult(False, f"place: {name} fell out of the hand while carried")
+        if slip > CARRY_SLIP:  # still in the hand: the caller decides where it goes down
             return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand while carried")
         grip = self.world.data.site("robot/grip")
         offset = grip.xpos - self.world.object_pose(name)[0]  # keep the object where it hangs now
@@ -508,7 +510,7 @@ class Robot:
             if path_in is None:
                 continue
             self._ease_to(path_in[0], quat)
-            if float(np.mean(self.controller.q()[-2:])) < MIN_HELD_OPENING:
+            if self._hand_empty():
                 self.held = None
                 self.retract()
                 return SkillResult(False, f"place: {name} fell out of the hand on the way into {node}")
@@ -602,6 +604,10 @@ class Robot:
         so a change of it is slip."""
         grip = self.world.data.site("robot/grip")
         return grip.xmat.reshape(3, 3).T @ (self.world.object_pose(name)[0] - grip.xpos)
+
+    def _hand_empty(self) -> bool:
+        """Whether the closed fingers hold nothing (they met each other)."""
+        return float(np.mean(self.controller.q()[-2:])) < MIN_HELD_OPENING
 
     def _held(self, name: str) -> Held:
         """Object `name` as it sits in the hand now, for clearance checks of moves that carry it."""
