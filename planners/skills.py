@@ -14,6 +14,7 @@ import numpy as np
 from homer_sim.catalog import CATALOG
 from homer_sim.graph import INSIDE, ON, RELATION_NAMES
 from homer_sim.observe import SceneGraphObserver
+from homer_sim.placement import place_world
 from homer_sim.spots import Spots
 from homer_sim.validate import ROBOT_RADIUS
 from planners.articulate import base_candidates
@@ -51,6 +52,7 @@ PULL_BASE_COST = 0.1  # IK damping on the base while drawing an object out: the 
 LEAD_HEIGHTS = (0.15, 0.3)  # m above a grasp's entry point the arm may first swing to, then come down
 SWING_STEP = 0.1  # rad between checked configurations of a joint-space swing
 LEVEL_HAND = 0.7  # horizontal part of the grip x axis above which the hand counts as held level
+OPEN_ABOVE = 0.5  # m of free height above a place below which a grasp from above does not fit
 SHELF_SPOTS = 6  # free spots on a shelf tried for a place, nearest the front first,
 SHELF_SPOT_GAP = 0.05  # m apart at least
 EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
@@ -264,8 +266,8 @@ class Robot:
         position, quat = self.world.object_pose(name)
         furniture = self.navigator.furniture.get(node)
         inside = graph.relation_of(name) == RELATION_NAMES[INSIDE] and furniture is not None
-        if inside and furniture.kind == "cabinet":  # on a shelf: from the front, the base placed for each grasp
-            return self._pick_from_shelf(name, node, cls, position, quat)
+        if (inside and furniture.kind == "cabinet") or self._under_a_shelf(node, position, cls.size[2]):
+            return self._pick_from_shelf(name, node, cls, position, quat)  # from the front, the base placed per grasp
         side_failures: list[str] = []
         if into is not None and furniture is not None and self._shelves(into, None):
             try:  # from the side nearest where the robot would stand
@@ -465,6 +467,18 @@ class Robot:
             return SkillResult(False, f"place: {name} ended {relation} {parent}, not {'inside' if inside else 'on'} "
                                       f"{node}")
         return SkillResult(True)
+
+    def _under_a_shelf(self, node: str, position: np.ndarray, height: float) -> bool:
+        """Whether an object of `height` m at `position` stands on a fixed shelf of furniture `node` with another
+        shelf less than OPEN_ABOVE m above it (a bookshelf's lower levels): only a grasp from the front fits."""
+        furniture = self.spots.furniture.get(node)
+        if furniture is None:
+            return False
+        bottom = position[2] - height / 2
+        below = [(place_world(self.world.layout, furniture, p)["z"], p) for _, p in
+                 [*self.spots.places_of(node, ON), *self.spots.places_of(node, INSIDE)] if p.part is None]
+        below = [(z, p) for z, p in below if z <= bottom + 0.02]
+        return bool(below) and max(below, key=lambda zp: zp[0])[1].clearance < OPEN_ABOVE
 
     def _shelves(self, node: str, relation: int | None) -> list[int]:
         """Indices of the shelves inside cabinet `node` that a place with `relation` goes to (none elsewhere)."""
