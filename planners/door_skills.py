@@ -221,7 +221,7 @@ class PartMover:
         """Drive to the planned base pose, reach in front of the grasp, move in and close the fingers."""
         robot = self.robot
         robot.retract()
-        self.navigator.drive_to(tuple(q_pre[:3]), robot.tuck)
+        self.navigator.drive_to(tuple(q_pre[:3]), robot.tucked())
         robot.reach(q_pre, grip=PRE_OPENING)
         self.controller.settle(0.003)
         self.controller.move_through([q_grasp])

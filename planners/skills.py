@@ -128,13 +128,19 @@ class Robot:
         self.folded = False
 
     def retract(self) -> None:
-        """Tuck the arm in place through `raised` (the base stays)."""
+        """Tuck the arm in place through `raised` (the base and the torso stay)."""
         if not self.folded:
             raised = self.raised(self.controller.target[3])
-            tuck = self.tuck.copy()
-            tuck[:3] = raised[:3]
-            self.controller.move_through([raised, tuck])
+            self.controller.move_through([raised, self.tucked()])
         self.folded = True
+
+    def tucked(self) -> np.ndarray:
+        """The tuck posture at the current base pose and torso height (at least the tuck's): the torso is the
+        slowest joint (0.1 m/s), so it stays up between skills instead of going down and up again."""
+        q = self.tuck.copy()
+        q[:3] = self.controller.target[:3]
+        q[3] = max(float(self.controller.target[3]), float(self.tuck[3]))
+        return q
 
     def go_to(self, node: str, target_xy: np.ndarray, surface_z: float | None = None) -> bool:
         """Drive to a free base pose in front of furniture `node`, facing `target_xy`: with the arm tucked, or
@@ -142,7 +148,7 @@ class Robot:
         object keeps clear of open doors, and, if it hangs lower than PASS_OVER above `surface_z` (m, the surface
         it is for), of the furniture itself: then the robot stops short and returns True."""
         if self.folded:
-            posture = self.tuck.copy()
+            posture = self.tucked()
         else:
             path = self._carry_path()
             self.controller.move_through(path)
@@ -193,7 +199,7 @@ class Robot:
             if lead is None:
                 continue
             self.retract()
-            self.navigator.drive_to(base, self.tuck)
+            self.navigator.drive_to(base, self.tucked())
             path_in = [*lead, *path]
             for q_in in path_in:
                 q_in[:3] = self.controller.target[:3]  # where the base really stopped
@@ -287,7 +293,7 @@ class Robot:
             if furniture is None:  # on the floor of a room
                 goal = self.navigator.stand_near(tuple(position[:2]))
                 self.retract()
-                self.navigator.drive_to(goal, self.tuck)
+                self.navigator.drive_to(goal, self.tucked())
             else:
                 self.go_to(node, position[:2])
         except NavigationError as error:

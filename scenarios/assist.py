@@ -223,7 +223,7 @@ class Assistant:
         """Back to the parking pose with the arm tucked, out of the person's way."""
         try:
             self.robot.retract()
-            self.robot.navigator.drive_to(DEFAULT_POSE, self.robot.tuck)
+            self.robot.navigator.drive_to(DEFAULT_POSE, self.robot.tucked())
         except NavigationError as error:
             log.warning("robot could not park: %s", error)
 
