@@ -18,13 +18,18 @@ def _others_moved(world: World, before: np.ndarray, moved: str) -> tuple[float, 
     return float(drift[k]), world.object_names[k]
 
 
-def test_robot_picks_bowl_from_counter_and_places_it_in_the_sink() -> None:
+def _scene(obj: str, position: tuple[float, float, float], on: str, seed: int) -> tuple[World, Robot]:
+    """Scenario set-up: `obj` put down at `position` (m), where it must settle on furniture `on`."""
     world = World(extras=[add_robot])
-    world.set_object_pose("bowl", (5.0, 0.45, 0.9 + 0.035 + 0.003))  # scenario set-up: bowl on the counter
+    world.set_object_pose(obj, position)
     world.settle()
-    robot = Robot(world, np.random.default_rng(3))
-    graph = robot.observer.observe_all()
-    assert graph.parent_of("bowl") == "kitchen_counter_right"
+    robot = Robot(world, np.random.default_rng(seed))
+    assert robot.observer.observe_all().parent_of(obj) == on
+    return world, robot
+
+
+def test_robot_picks_bowl_from_counter_and_places_it_in_the_sink() -> None:
+    world, robot = _scene("bowl", (5.0, 0.45, 0.9 + 0.035 + 0.003), "kitchen_counter_right", seed=3)
     before = world.object_positions()
     start = world.object_pose("bowl")[0]
 
@@ -88,12 +93,7 @@ def test_robot_fetches_milk_from_the_fridge_to_the_dining_table() -> None:
 
 
 def test_robot_puts_cereal_from_the_table_back_on_its_cupboard_shelf() -> None:
-    world = World(extras=[add_robot])
-    world.set_object_pose("food_cereal", (2.6, 2.0, 0.75 + 0.14 + 0.003))  # scenario set-up: left on the table
-    world.settle()
-    robot = Robot(world, np.random.default_rng(0))
-    graph = robot.observer.observe_all()
-    assert graph.parent_of("food_cereal") == "table_dining_room"
+    world, robot = _scene("food_cereal", (2.6, 2.0, 0.75 + 0.14 + 0.003), "table_dining_room", seed=0)
     opened = robot.open_articulation("cupboard")
     assert opened.success, opened.reason
     before = world.object_positions()
