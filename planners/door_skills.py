@@ -98,7 +98,7 @@ class ClearanceCheck:
             d.qpos[held.qpos_adr:held.qpos_adr + 3] = d.site_xpos[self.grip] + rotation @ held.position
             mujoco.mju_mat2Quat(d.qpos[held.qpos_adr + 3:held.qpos_adr + 7], (rotation @ held.rotation).ravel())
             mujoco.mj_kinematics(self.model, d)
-            robot, checked = robot | held.geoms, robot | held.geoms
+            robot = checked = robot | held.geoms  # the fingers are checked too, against all but the object
         mujoco.mj_collision(self.model, d)
         for c in d.contact[: d.ncon]:
             g1, g2 = int(c.geom1), int(c.geom2)

@@ -240,24 +240,27 @@ def run_suite(quick: bool = False, trials: int | None = None, seed: int = 0, pro
     chosen = classes if classes is not None else (quick_subset(included) if quick else included)
     trials = trials if trials is not None else (QUICK_TRIALS if quick else DEFAULT_TRIALS)
     world = RecordedWorld(extras=[add_robot])
+    world.reset_settled()  # the settled start is computed once, before the recorded clock starts
     if rrd is not None:
         world.recording = Recording(rrd)
         world.recording.log_geometry(world.model, world.data)
     started = time.perf_counter()
     runs = [(cls, name, k) for cls, name in chosen.items() for k in range(trials)]
     results: list[TrialResult] = []
-    for cls, name, k in tqdm(runs, desc="grasp suite", unit="trial", disable=not progress, file=sys.stderr):
-        rng = np.random.default_rng([seed, _stable_hash(cls), k])
-        outcome = run_trial(world, cls, name, rng)
-        text = (f"{cls} trial {k}: " + ("ok" if outcome.success else f"FAILED {outcome.reason}")
-                + f" (lift {outcome.lift_m:.3f} m, slip {outcome.slip_m:.4f} m, {outcome.wall_s:.1f} s)")
-        log.info(text)
+    try:
+        for cls, name, k in tqdm(runs, desc="grasp suite", unit="trial", disable=not progress, file=sys.stderr):
+            rng = np.random.default_rng([seed, _stable_hash(cls), k])
+            outcome = run_trial(world, cls, name, rng)
+            text = (f"{cls} trial {k}: " + ("ok" if outcome.success else f"FAILED {outcome.reason}")
+                    + f" (lift {outcome.lift_m:.3f} m, slip {outcome.slip_m:.4f} m, {outcome.wall_s:.1f} s)")
+            log.info(text)
+            if world.recording is not None:
+                world.recording.log_event(text, level="INFO" if outcome.success else "WARN")
+                world.physics_offset += float(world.data.time)
+            results.append(outcome)
+    finally:  # what was recorded stays readable when a trial raises
         if world.recording is not None:
-            world.recording.log_event(text, level="INFO" if outcome.success else "WARN")
-            world.physics_offset += float(world.data.time)
-        results.append(outcome)
-    if world.recording is not None:
-        world.recording.close()
+            world.recording.close()
     return summarise(results, excluded, len(included) + len(excluded), time.perf_counter() - started,
                      {"quick": quick, "seed": seed, "trials_per_class": trials, "rrd": str(rrd) if rrd else None})
 

@@ -253,10 +253,16 @@ class Robot:
         the arm's reach, the hand stays at the last reachable point."""
         x, y, yaw = self.controller.target[:3]
         point = np.array([x + CARRY_REACH * np.cos(yaw), y + CARRY_REACH * np.sin(yaw), CARRY_HEIGHT])
+        return self._hand_line(point, self._held_quat(), GRASP_BASE_COST, partial=True) or [
+            self.controller.target.copy()]
+
+    def _hand_line(self, point: np.ndarray, quat: np.ndarray, base_cost: float, partial: bool = False
+                   ) -> list[np.ndarray] | None:
+        """`_line` from where the grip site is now to `point` (m), CARRY_STEP m between IK waypoints (at least
+        two), every one within WAYPOINT_TOL: a move between poses, not onto a grasp."""
         start = self.world.data.site("robot/grip").xpos.copy()
         steps = max(2, int(np.ceil(np.linalg.norm(point - start) / CARRY_STEP)))
-        return self._line(start, point, self._held_quat(), steps, loose_end=True, partial=True) or [
-            self.controller.target.copy()]
+        return self._line(start, point, quat, steps, base_cost=base_cost, loose_end=True, partial=partial)
 
     # --- pick --------------------------------------------------------------------------------------------
     def pick(self, name: str, node: str | None = None, into: str | None = None) -> SkillResult:
@@ -555,10 +561,7 @@ class Robot:
         """Move a held object to configuration q (shape (13,), grip orientation `quat`): along a straight grip
         line as far as it is reachable, the rest in joint space, slowly (a quick swing turns a long object held
         by one end in the fingers)."""
-        start = self.world.data.site("robot/grip").xpos.copy()
-        end = self.ik.grip_pose(q)[0]
-        steps = max(2, int(np.ceil(np.linalg.norm(end - start) / CARRY_STEP)))
-        lead = self._line(start, end, quat, steps, base_cost=ARC_BASE_COST, loose_end=True, partial=True)
+        lead = self._hand_line(self.ik.grip_pose(q)[0], quat, ARC_BASE_COST, partial=True)
         if lead:
             self.controller.move_through(lead)
         self.controller.move_through([q], duration=EASE_SLOWDOWN * self.controller.duration(self.controller.target, q))
@@ -608,12 +611,9 @@ class Robot:
         return SkillResult(*PartMover(self).move_to(name, opening=False))
 
     def _grip_line(self, point: np.ndarray, quat: np.ndarray) -> bool:
-        """Move the grip site in a straight line to `point` (m), orientation `quat` kept, CARRY_STEP m between
-        IK waypoints (each within WAYPOINT_TOL, the end too: these are moves between poses, not grasps), the base
-        free to follow; False (nothing moved) if the line leaves the arm's reach."""
-        start = self.world.data.site("robot/grip").xpos.copy()
-        steps = max(1, int(np.ceil(np.linalg.norm(point - start) / CARRY_STEP)))
-        path = self._line(start, point, quat, steps=steps, base_cost=PULL_BASE_COST, loose_end=True)
+        """Move the grip site in a straight line to `point` (m), orientation `quat` kept (see `_hand_line`), the
+        base free to follow; False (nothing moved) if the line leaves the arm's reach."""
+        path = self._hand_line(point, quat, PULL_BASE_COST)
         if path is None:
             return False
         self.controller.move_through(path)

@@ -138,10 +138,6 @@ def data_folder(generator, spec: DataSpec) -> Path:
     return cache_root() / f"{spec.household}_{spec.train_days}+{spec.test_days}d_seed{spec.seed}_{digest}"
 
 
-def household_index(generator, household: str) -> int:
-    """The household's position among the generator's households: `homer generate` seeds its days by it."""
-    return list(generator.households).index(household)
-
 
 def ensure_dataset(generator, spec: DataSpec) -> tuple[Dataset, float]:
     """The dataset of `spec.household` (generated where missing, day by day, resumable); returns it and the wall
@@ -150,7 +146,7 @@ def ensure_dataset(generator, spec: DataSpec) -> tuple[Dataset, float]:
     started = time.perf_counter()
     house = spec.household
     meta = generator.meta([house], {"generator": {"seed": spec.seed, "household": house, "homer_sim": __version__}})
-    h_index = household_index(generator, house) if house != HOUSEHOLD else 0
+    h_index = 0 if house == HOUSEHOLD else list(generator.households).index(house)  # as `homer generate` seeds
     if not (folder / "meta.json").is_file():
         write_meta(folder, meta)
     made = 0
