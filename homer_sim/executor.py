@@ -73,6 +73,7 @@ class Executor(Handling):
         self.rng = np.random.default_rng(0)
         self.log = DayLog()
         self._grabbed_from: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self.grabbed_at: dict[str, float] = {}  # object -> routine minute the person last took it in hand
 
     # --- day --------------------------------------------------------------------------------------------
     def start_day(self, rng: np.random.Generator) -> None:
@@ -82,6 +83,7 @@ class Executor(Handling):
         self.minute = float(DAY_START_MIN)
         self.log = DayLog()
         self._grabbed_from = {}
+        self.grabbed_at = {}
         self._graph = self.observer.observe_all()
 
     def carried_indices(self) -> list[int]:

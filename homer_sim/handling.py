@@ -194,6 +194,7 @@ class Handling:
             self.ensure_open(self.part_holding(container, self.world.object_pose(name)[0]), opened)
         pos, quat = self.world.object_pose(name)
         self._grabbed_from[name] = (pos.copy(), quat.copy(), container)
+        self.grabbed_at[name] = self.minute
         riders = [c for c in self._graph.children_of(name) if c in self.movable and c not in self.avatar.carried()]
         hand_body = self.avatar.hands[hand]
         self.avatar.set_hand(hand, pos, follow=False)

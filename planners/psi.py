@@ -9,7 +9,9 @@ The plan orders the relocations into robot steps: a container (furniture with do
 anything is taken from or put into it, with an empty hand, and closed after its last use, again with an empty hand.
 Relocations are skipped, with a reason, for objects in the person's hand, objects the robot cannot grasp, moves
 below the confidence threshold, destinations the robot cannot place on, and objects the robot itself placed and
-still holds for the person (`Holds`): the robot never undoes its own help before the person has used it.
+still holds for the person (`Holds`): the robot never undoes its own help before the person has used it. Help
+the person left unused until its window passed is put back where it came from (`unused_help`), whatever the
+prediction says.
 
 Pure logic: numpy and the model's metric functions, no physics.
 """
@@ -31,13 +33,15 @@ PLACEABLE_CATEGORIES = ("furniture", "appliance")  # what the robot's place skil
 @dataclass(frozen=True)
 class Relocation:
     """Move `obj` from `source` to `destination` (node names), predicted `steps_ahead` grid steps after the query
-    with probability `confidence` (0..1) for that destination."""
+    with probability `confidence` (0..1) for that destination; `put_back`: not a prediction but the robot's unused
+    help going back (`unused_help`)."""
 
     obj: str
     source: str
     destination: str
     steps_ahead: int
     confidence: float
+    put_back: bool = False
 
 
 @dataclass(frozen=True)
@@ -62,13 +66,14 @@ class Plan:
 
 @dataclass(frozen=True)
 class Hold:
-    """The robot put `obj` on `node` at routine minute `since`; it stays there until `until` (min) or until the
-    person moves it."""
+    """The robot put `obj` on `node` (taking it from `source`) at routine minute `since`; it stays there until
+    `until` (min) or until the person takes it."""
 
     obj: str
     node: str
     since: float
     until: float
+    source: str = ""
 
 
 class Holds:
@@ -77,15 +82,19 @@ class Holds:
     def __init__(self) -> None:
         self.active: dict[str, Hold] = {}
 
-    def add(self, obj: str, node: str, minute: float, until: float) -> None:
-        """Hold `obj` on `node` from routine minute `minute` to `until`."""
-        self.active[obj] = Hold(obj, node, float(minute), float(until))
+    def add(self, obj: str, node: str, minute: float, until: float, source: str = "") -> None:
+        """Hold `obj` on `node` (brought from `source`) from routine minute `minute` to `until`."""
+        self.active[obj] = Hold(obj, node, float(minute), float(until), source)
 
-    def update(self, graph: SceneGraph, minute: float, used: Collection[str] = ()) -> list[Hold]:
+    def update(self, graph: SceneGraph, minute: float, used: Collection[str] = (),
+               grabbed_at: Mapping[str, float] | None = None) -> list[Hold]:
         """Release holds whose window has passed (until < minute), whose object the observed graph shows away from
-        its node (the person moved it), or which are in `used` (e.g. seen in the person's hand); returns them."""
+        its node (the person moved it), which are in `used` (e.g. seen in the person's hand) or which the person
+        took in hand since the hold began (`grabbed_at`: object -> last minute taken); returns them."""
+        grabbed_at = grabbed_at or {}
         released = [h for h in self.active.values()
-                    if h.until < minute or graph.parent_of(h.obj) != h.node or h.obj in used]
+                    if h.until < minute or graph.parent_of(h.obj) != h.node or h.obj in used
+                    or grabbed_at.get(h.obj, -np.inf) >= h.since]
         for hold in released:
             del self.active[hold.obj]
         return released
@@ -95,6 +104,16 @@ class Holds:
         if hold is None:
             return None
         return f"held on {hold.node} for the person (placed at {hold.since:.0f} min, until {hold.until:.0f} min)"
+
+
+def unused_help(released: Sequence[Hold], graph: SceneGraph, used: Collection[str] = (),
+                grabbed_at: Mapping[str, float] | None = None) -> list[Relocation]:
+    """Relocations that put back what the robot brought and the person did not use (the paper's skipped breakfast):
+    for each released hold whose object is still where the robot put it and untouched since, back to its source."""
+    grabbed_at = grabbed_at or {}
+    return [Relocation(h.obj, h.node, h.source, 0, 1.0, put_back=True) for h in released
+            if h.source and graph.parent_of(h.obj) == h.node and h.obj not in used
+            and grabbed_at.get(h.obj, -np.inf) < h.since]
 
 
 def first_moves(observed: np.ndarray, rollout: Rollout, threshold: float, window_steps: int,
@@ -203,16 +222,21 @@ def plan_relocations(graph: SceneGraph, movable: np.ndarray, relocations: Sequen
 def psi(graph: SceneGraph, movable: np.ndarray, rollout: Rollout, *, threshold: float, window_steps: int,
         containers: Mapping[str, Sequence[str]], carried: Collection[str] = (),
         excluded: Callable[[str], str | None] = lambda obj: None, holds: Holds | None = None,
-        already_open: Collection[str] = (), in_use: Collection[str] = ()) -> Plan:
+        already_open: Collection[str] = (), in_use: Collection[str] = (),
+        returns: Sequence[Relocation] = ()) -> Plan:
     """The robot's plan for one query: relocations from `graph` (observed at t) to the rollout's first predicted
     destinations within `window_steps` grid steps, gated by `threshold`, ordered by `plan_relocations`.
 
     carried: objects in the person's hand. excluded: object name -> why the robot cannot grasp it (None if it can).
     holds: objects the robot placed and keeps for the person. in_use: furniture the person is at now; nothing is
     taken from it or put on it while they are there (the robot does not clear a table the person eats at). Moves
-    that do not reach the threshold are reported among the skipped ones.
+    that do not reach the threshold are reported among the skipped ones. returns: relocations made whatever the
+    prediction (`unused_help`); they replace the predicted moves of their objects.
     """
     passed, below = predicted_relocations(graph, movable, rollout, threshold, window_steps)
+    returned = {r.obj for r in returns}
+    passed = [*returns, *(r for r in passed if r.obj not in returned)]
+    below = [r for r in below if r.obj not in returned]
 
     def skip(r: Relocation) -> str | None:
         if r.obj in carried:

@@ -25,7 +25,7 @@ from homer_sim.recording import RecordedWorld
 from homer_sim.world import World
 from planners.grasps import ungraspable_reason
 from planners.navigation import NavigationError
-from planners.psi import Holds, Plan, PlanStep, Relocation, psi
+from planners.psi import Holds, Plan, PlanStep, Relocation, psi, unused_help
 from planners.robot import DEFAULT_POSE, add_robot
 from planners.skills import Robot, SkillResult
 
@@ -99,6 +99,7 @@ class Assistant:
         self.threshold = tuned if threshold is None else float(threshold)
         self.containers = containers_of(self.world)
         self.holds = Holds()
+        self.returns: dict[str, Relocation] = {}  # unused help to put back, until tried or the person moves it
         self.failed: dict[str, tuple[float, str]] = {}  # object -> (retry after minute, reason)
         self.busy_until = -np.inf
         self.log = AssistLog()
@@ -111,14 +112,18 @@ class Assistant:
         day = self.executor.log
         graph = SceneGraph(self.executor.nodes, self.executor.observer.categories, day.parents[-1], day.relations[-1])
         carried = set(self.executor.avatar.carried())
-        self.holds.update(graph, minute, used=carried)
+        grabbed_at = self.executor.grabbed_at
+        released = self.holds.update(graph, minute, used=carried, grabbed_at=grabbed_at)
+        self.returns.update({r.obj: r for r in unused_help(released, graph, carried, grabbed_at)})
+        self.returns = {o: r for o, r in self.returns.items() if graph.parent_of(o) == r.source and o not in carried}
         rollout = self.predictor.rollout(graph.parent[None].astype(np.int64), np.array([minute], dtype=np.float32),
                                          self.window_steps)
         self._log_prediction(graph, rollout, minute)
         open_now = {f for f, parts in self.containers.items() if any(self.world.openness(p) > 0.1 for p in parts)}
         plan = psi(graph, self.predictor.movable, rollout, threshold=self.threshold, window_steps=self.window_steps,
                    containers=self.containers, carried=carried, excluded=lambda obj: self._excluded(obj, minute),
-                   holds=self.holds, already_open=open_now, in_use=self._person_at())
+                   holds=self.holds, already_open=open_now, in_use=self._person_at(),
+                   returns=tuple(self.returns.values()))
         if not plan.relocations:
             return float(minute)
         self.log.plans.append((minute, plan))
@@ -214,9 +219,11 @@ class Assistant:
         graph = self.robot.observer.update()
         ended = graph.parent_of(relocation.obj) or ""
         self.log.relocations.append(RelocationOutcome(query, relocation, done, reason, ended))
-        if done:
-            self.holds.add(relocation.obj, ended, query, query + self.window_min)
-        else:
+        if relocation.put_back:  # tried once: if it failed, the predictor decides from now on
+            self.returns.pop(relocation.obj, None)
+        if done and not relocation.put_back:
+            self.holds.add(relocation.obj, ended, query, query + self.window_min, source=relocation.source)
+        elif not done:
             self.failed[relocation.obj] = (query + self.window_min, reason)
 
     def _park(self) -> None:

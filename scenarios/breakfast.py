@@ -75,8 +75,9 @@ def score(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...], window_s
         r = outcome.relocation
         truth = reference_truth(reference, outcome.minute, index[r.obj], window_steps)
         rows.append({"minute": outcome.minute, "object": r.obj, "from": r.source, "to": r.destination,
-                     "confidence": round(r.confidence, 3), "done": outcome.done, "reason": outcome.reason,
-                     "ended_on": outcome.ended_on, "person_unassisted": nodes[truth] if truth >= 0 else None,
+                     "confidence": round(r.confidence, 3), "put_back": r.put_back, "done": outcome.done,
+                     "reason": outcome.reason, "ended_on": outcome.ended_on,
+                     "person_unassisted": nodes[truth] if truth >= 0 else None,
                      "correct": outcome.done and truth == index[r.destination]})
     skipped = [{"minute": m, "object": r.obj, "to": r.destination, "reason": why}
                for m, plan in assist.plans for r, why in plan.skipped]
@@ -84,6 +85,18 @@ def score(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...], window_s
             "relocations_correct": sum(r["correct"] for r in rows),
             "relocations_wrong": sum(r["done"] and not r["correct"] for r in rows), "relocations": rows,
             "skipped": skipped}
+
+
+def end_state(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...]) -> dict:
+    """Where the objects the robot moved are at the end of the run, against where the person alone left them (the
+    reference's last snapshot): tidy-up is judged here, since the paper's metrics count only the person's moves."""
+    index = {n: i for i, n in enumerate(nodes)}
+    moved = sorted({o.relocation.obj for o in assist.relocations if o.done})
+    final, alone = assist.day.parents[-1], reference.parents[-1]
+    elsewhere = {obj: {"assisted": nodes[final[index[obj]]], "unassisted": nodes[alone[index[obj]]]}
+                 for obj in moved if final[index[obj]] != alone[index[obj]]}
+    return {"robot_moved": len(moved), "robot_moved_left_as_unassisted": len(moved) - len(elsewhere),
+            "left_elsewhere": elsewhere}
 
 
 @dataclass(frozen=True)
@@ -150,6 +163,7 @@ def assisted_run(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec 
     result = score(assist, reference, dataset.meta.nodes, spec.window_min // dataset.meta.grid_min)
     rooms = {n for n, c in zip(dataset.meta.nodes, dataset.meta.categories, strict=True) if c == "room"}
     result.update(fetches(assist, reference, rooms, spec.window_min))
+    result.update(end_state(assist, reference, dataset.meta.nodes))
     result.update({"rrd": str(rrd) if rrd is not None else None, "household": spec.household,
                    "day": f"{morning.split}/{morning.index}", "schedule": [list(e) for e in entries],
                    "method": spec.method, "threshold": assistant.threshold, "window_min": spec.window_min,
@@ -171,7 +185,8 @@ def format_summary(result: dict) -> list[str]:
     for r in result["relocations"]:
         status = "done" if r["done"] else f"FAILED: {r['reason']}"
         verdict = "correct" if r["correct"] else f"person would have moved it to {r['person_unassisted']}"
-        lines.append(f"  {clock(r['minute'])} {r['object']}: {r['from']} -> {r['to']} (p {r['confidence']:.2f}) "
+        why = "unused, put back" if r["put_back"] else f"p {r['confidence']:.2f}"
+        lines.append(f"  {clock(r['minute'])} {r['object']}: {r['from']} -> {r['to']} ({why}) "
                      f"{status}; {verdict if r['done'] else ''}".rstrip("; "))
     lines.append(f"relocations planned {result['relocations_planned']}, done {result['relocations_done']}, "
                  f"correct {result['relocations_correct']}, wrong {result['relocations_wrong']}; robot busy "
@@ -179,6 +194,11 @@ def format_summary(result: dict) -> list[str]:
     if result["fetches"]:
         lines.append(f"the robot had already done {result['fetches_done_by_robot']} of the person's "
                      f"{result['fetches']} fetches ({100 * result['fetch_share']:.0f}%)")
+    if result["robot_moved"]:
+        lines.append(f"at the end, {result['robot_moved_left_as_unassisted']} of the {result['robot_moved']} objects "
+                     "the robot moved are where the person alone would have left them" + "".join(
+                         f"; {obj} on {w['assisted']}, not {w['unassisted']}"
+                         for obj, w in result["left_elsewhere"].items()))
     if result["error"]:
         lines.append(f"the run stopped early: {result['error']}")
     lines.append("stages: " + ", ".join(f"{k} {v:.1f} s" for k, v in result["stages_s"].items()))

@@ -6,7 +6,7 @@ import numpy as np
 
 from homer_sim.graph import INSIDE, ON, SceneGraph
 from model.predictor import Rollout
-from planners.psi import Holds, PlanStep, psi
+from planners.psi import Holds, PlanStep, psi, unused_help
 
 NODES = ("kitchen", "cupboard", "fridge", "table", "sink", "bowl", "cereal", "milk", "spoon", "tray")
 CATEGORIES = ("room", "furniture", "appliance", "furniture", "furniture", "object", "object", "object", "object",
@@ -131,6 +131,26 @@ def test_held_objects_stay_until_the_person_moves_them_or_the_window_passes() ->
     assert [h.obj for h in holds.update(in_sink, minute=470.0)] == ["bowl"]  # the person used it
     holds.add("cereal", "table", minute=460.0, until=490.0)
     assert [h.obj for h in holds.update(_graph(cereal="table"), 470.0, used={"cereal"})] == ["cereal"]
+
+
+def test_help_the_person_did_not_use_goes_back_where_it_came_from_whatever_the_prediction() -> None:
+    holds = Holds()
+    on_table = _graph(bowl="table", cereal="table", milk="table")
+    for obj, source in (("bowl", "cupboard"), ("cereal", "cupboard"), ("milk", "fridge")):
+        holds.add(obj, "table", minute=400.0, until=430.0, source=source)
+    grabbed_at = {"cereal": 425.0, "milk": 390.0}  # the person took the cereal; the milk only before the robot
+    assert holds.update(on_table, 420.0, grabbed_at={"milk": 390.0}) == []
+    released = holds.update(on_table, 440.0, grabbed_at=grabbed_at)
+    assert sorted(h.obj for h in released) == ["bowl", "cereal", "milk"]
+    returns = unused_help(released, on_table, grabbed_at=grabbed_at)
+    assert [(r.obj, r.source, r.destination, r.put_back) for r in returns] == [
+        ("bowl", "table", "cupboard", True), ("milk", "table", "fridge", True)]
+    assert unused_help(released, _graph(bowl="sink", milk="table"), used={"milk"}) == []  # moved or in hand
+    to_sink = _rollout(on_table, {"bowl": [("sink", 0.9)] * 3, "cereal": [("cupboard", 0.9)] * 3})
+    plan = _plan(on_table, to_sink, returns=returns)
+    assert {(r.obj, r.destination) for r in plan.relocations} == {("bowl", "cupboard"), ("milk", "fridge"),
+                                                                  ("cereal", "cupboard")}
+    assert [s.action for s in plan.steps if s.obj == "bowl"] == ["pick", "place"]
 
 
 def test_nothing_is_taken_from_or_put_on_furniture_the_person_is_at() -> None:

@@ -16,7 +16,7 @@ from homer_sim.households import load_households
 from homer_sim.recording import read_recording
 from planners.psi import Relocation
 from scenarios.assist import AssistLog, RelocationOutcome
-from scenarios.breakfast import MorningRun, assisted_run, fetches
+from scenarios.breakfast import MorningRun, assisted_run, end_state, fetches
 from scenarios.breakfast_data import DataSpec
 from scenarios.registry import SCENARIOS, get
 
@@ -113,3 +113,18 @@ def test_fetch_share_counts_the_persons_moves_the_robot_had_already_made() -> No
                                     done(490, "spoon", "table_dining_room", ok=False)])  # failed
     assert fetches(assist, reference, {"dining_room"}, 30) == {
         "fetches": 4, "fetches_done_by_robot": 1, "fetch_share": 0.25}
+
+
+def test_end_state_compares_what_the_robot_moved_with_the_unassisted_day() -> None:
+    nodes = ("kitchen", "cupboard", "table", "bowl", "milk", "spoon")
+    reference = DayLog(parents=[np.array([-1, 0, 0, 1, 1, 1])])  # the person alone left everything in the cupboard
+    assisted = DayLog(parents=[np.array([-1, 0, 0, 1, 2, 2])])
+
+    def outcome(obj: str, ok: bool) -> RelocationOutcome:
+        return RelocationOutcome(400, Relocation(obj, "cupboard", "table", 1, 0.9), ok, "", "table")
+
+    assist = AssistLog(relocations=[outcome("bowl", True), outcome("milk", True), outcome("spoon", False)],
+                       day=assisted)
+    assert end_state(assist, reference, nodes) == {
+        "robot_moved": 2, "robot_moved_left_as_unassisted": 1,
+        "left_elsewhere": {"milk": {"assisted": "table", "unassisted": "cupboard"}}}
