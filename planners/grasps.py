@@ -71,6 +71,19 @@ def matrix_to_quat(r: np.ndarray) -> np.ndarray:
     return q / np.linalg.norm(q)
 
 
+def slerp(q0: np.ndarray, q1: np.ndarray, s: float) -> np.ndarray:
+    """The unit wxyz quaternion a fraction `s` (0..1) of the way from q0 to q1 along the shorter arc."""
+    q0, q1 = np.asarray(q0, dtype=float), np.asarray(q1, dtype=float)
+    dot = float(np.dot(q0, q1))
+    if dot < 0.0:
+        q1, dot = -q1, -dot
+    angle = math.acos(min(dot, 1.0))
+    if angle < 1e-6:
+        return q1 / np.linalg.norm(q1)
+    q = (math.sin((1.0 - s) * angle) * q0 + math.sin(s * angle) * q1) / math.sin(angle)
+    return q / np.linalg.norm(q)
+
+
 def top_rotation(finger_yaw: float) -> np.ndarray:
     """Grip x pointing down, fingers closing along the horizontal direction at `finger_yaw` (rad)."""
     x = np.array([0.0, 0.0, -1.0])

@@ -24,7 +24,7 @@ from planners.grasps import (
     Grasp,
     matrix_to_quat,
     shelf_grasps,
-    side_grasps,
+    slerp,
     top_grasps,
     ungraspable_reason,
 )
@@ -41,6 +41,7 @@ CARRY_REACH = 0.35  # m from the base centre
 CARRY_HEIGHT = 1.05  # m
 CARRY_SLIP = 0.03  # m the held object may shift in the hand while carried before a place gives up
 CARRY_STEP = 0.05  # m between IK waypoints on the way to the carry point
+TURN_STEP = 0.15  # rad the hand turns at most between IK waypoints of a move between poses
 RAISED_SHOULDER = -1.0  # rad: upper arm raised above the tuck
 SIDE_LIFT = 0.03  # m: a side grasp first lifts the object this much off its shelf,
 SIDE_PULL = 0.35  # m: then draws it this far out of the furniture,
@@ -51,6 +52,8 @@ PASS_OVER = 0.03  # m between a carried object and a surface it is carried over 
 PULL_BASE_COST = 0.1  # IK damping on the base while drawing an object out: the base backs away
 LEAD_HEIGHTS = (0.15, 0.3)  # m above a grasp's entry point the arm may first swing to, then come down
 SWING_STEP = 0.1  # rad between checked configurations of a joint-space swing
+UPRIGHT = 0.7  # z component of an object's up axis below which a put-down object has fallen over
+PITCHED_HAND = 0.25  # horizontal part of the grip x axis above which the hand does not count as pointing down
 LEVEL_HAND = 0.7  # horizontal part of the grip x axis above which the hand counts as held level
 OPEN_ABOVE = 0.5  # m of free height above a place below which a grasp from above does not fit
 SHELF_SPOTS = 6  # free spots on a shelf tried for a place, nearest the front first,
@@ -93,17 +96,21 @@ class Robot:
 
     def _line(self, start: np.ndarray, end: np.ndarray, quat: np.ndarray, steps: int = 4,
               base_cost: float = GRASP_BASE_COST, loose_end: bool = False,
-              partial: bool = False) -> list[np.ndarray] | None:
+              partial: bool = False, seed: np.ndarray | None = None,
+              from_quat: np.ndarray | None = None) -> list[np.ndarray] | None:
         """IK configurations along the straight grip-site line start -> end (m), or None if any is unreachable
         (with `partial`, those up to the last reachable point instead); base_cost: IK damping on the base (low
         lets the base back away, e.g. drawing an object off a shelf). Points before the end are solved within
-        WAYPOINT_TOL, the end exactly unless `loose_end`."""
-        q = self.controller.target.copy()
+        WAYPOINT_TOL, the end exactly unless `loose_end`. seed: the configuration at `start` (default: the
+        controller's target). from_quat: the orientation at `start`, turned evenly into `quat` on the way (default:
+        `quat` all along)."""
+        q = (self.controller.target if seed is None else seed).copy()
         path = []
         for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
             loose = {} if s == 1.0 and not loose_end else {"position_tol": WAYPOINT_TOL[0],
                                                             "orientation_tol": WAYPOINT_TOL[1]}
-            result = self.ik.solve(q, start + s * (end - start), quat, base_cost=base_cost, seeds=False, **loose)
+            turned = quat if from_quat is None else slerp(from_quat, quat, s)
+            result = self.ik.solve(q, start + s * (end - start), turned, base_cost=base_cost, seeds=False, **loose)
             if not result.converged:
                 return path if partial else None
             q = result.q
@@ -248,27 +255,38 @@ class Robot:
 
     def _carry_path(self) -> list[np.ndarray]:
         """Configurations (each shape (13,)) along a straight grip-site line from where the hand is to the carry
-        point, CARRY_REACH m in front of the base at CARRY_HEIGHT m, orientation kept; a joint-space move there
-        could swing the held object down through the furniture or out of the fingers. Where the line leaves
-        the arm's reach, the hand stays at the last reachable point."""
+        point, CARRY_REACH m in front of the base at CARRY_HEIGHT m; a joint-space move there could swing the held
+        object down through the furniture or out of the fingers. A hand pointing behind the base's front (and not
+        down) turns on the way about the vertical to point ahead of it: a later move into a shelf the base faces
+        would swing the object past the base and knock it out of the fingers. Otherwise the orientation is kept.
+        Where the line leaves the arm's reach, the hand stays at the last reachable point."""
         x, y, yaw = self.controller.target[:3]
         point = np.array([x + CARRY_REACH * np.cos(yaw), y + CARRY_REACH * np.sin(yaw), CARRY_HEIGHT])
-        return self._hand_line(point, self._held_quat(), GRASP_BASE_COST, partial=True) or [
+        rotation = self.world.data.site("robot/grip").xmat.reshape(3, 3)
+        ahead = np.array([np.cos(yaw), np.sin(yaw)])
+        if np.linalg.norm(rotation[:2, 0]) > PITCHED_HAND and rotation[:2, 0] @ ahead < 0.0:  # points back: turn it
+            rotation = _yaw_matrix(yaw - math.atan2(rotation[1, 0], rotation[0, 0])) @ rotation
+        return self._hand_line(point, matrix_to_quat(rotation), GRASP_BASE_COST, partial=True) or [
             self.controller.target.copy()]
 
     def _hand_line(self, point: np.ndarray, quat: np.ndarray, base_cost: float, partial: bool = False
                    ) -> list[np.ndarray] | None:
-        """`_line` from where the grip site is now to `point` (m), CARRY_STEP m between IK waypoints (at least
-        two), every one within WAYPOINT_TOL: a move between poses, not onto a grasp."""
+        """`_line` from where the grip site is now to `point` (m) at orientation `quat`, turning the hand evenly
+        on the way: CARRY_STEP m and at most TURN_STEP rad between IK waypoints (at least two), every one within
+        WAYPOINT_TOL: a move between poses, not onto a grasp."""
         start = self.world.data.site("robot/grip").xpos.copy()
-        steps = max(2, int(np.ceil(np.linalg.norm(point - start) / CARRY_STEP)))
-        return self._line(start, point, quat, steps, base_cost=base_cost, loose_end=True, partial=partial)
+        now = self._held_quat()
+        turn = 2.0 * math.acos(min(abs(float(np.dot(now, quat))), 1.0))
+        steps = max(2, int(np.ceil(np.linalg.norm(point - start) / CARRY_STEP)), int(np.ceil(turn / TURN_STEP)))
+        return self._line(start, point, quat, steps, base_cost=base_cost, loose_end=True, partial=partial,
+                          from_quat=now)
 
     # --- pick --------------------------------------------------------------------------------------------
     def pick(self, name: str, node: str | None = None, into: str | None = None) -> SkillResult:
         """Grasp object `name` and lift it LIFT m; `node` (the furniture it is on or in) is where to stand.
-        `into`: where it goes next; a cabinet's shelf takes an object held from the side (its hand enters the
-        compartment level), so from a table it is then grasped from the side first."""
+        `into`: where it goes next; a cabinet's shelf takes an object held from the side or pitched down from the
+        front (a hand pointing straight down does not fit under the shelf above), so from a table it is then
+        grasped that way first."""
         cls = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls]
         reason = ungraspable_reason(cls)
         if reason is not None:
@@ -318,16 +336,17 @@ class Robot:
                          out: np.ndarray | None = None) -> SkillResult:
         """Pick `name` from a shelf inside cabinet `node`: each grasp of `shelf_grasps` in turn, from a base
         pose where the arm clears the compartment; the object lifted SIDE_LIFT m, drawn out, then raised.
-        With `out` (a horizontal unit vector, shape (2,)), from an open top instead: side grasps only, approached
-        against `out`, the fingers as deep on the object as they reach."""
+        With `out` (a horizontal unit vector, shape (2,)), from an open top instead, for a shelf next: the grasps a
+        shelf takes (side grasps, the fingers as deep on the object as they reach, then pitched ones), approached
+        against `out`."""
         furniture = self.navigator.furniture[node]
         if out is None:
             out = self.navigator.front_normal(node)
             front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
             grasps = shelf_grasps(cls, position, quat, out, front)
-        else:
+        else:  # side grasps, then pitched ones (a hand pointing straight down does not fit under a shelf)
             front = -np.inf
-            grasps = side_grasps(cls, position, quat, out, front)
+            grasps = [g for g in shelf_grasps(cls, position, quat, out, front) if not g.kind.endswith("-90")]
         if not grasps:
             return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
         unreachable, failures = [], []
@@ -461,7 +480,19 @@ class Robot:
             return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
         self.controller.move_through(down)
         self.controller.settle(0.003)
-        return self._let_go(name, node, 0.05, self._line(release, above, quat))
+        return self._let_go(name, node, 0.05, self._retreat(release, quat))
+
+    def _retreat(self, release: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
+        """Configurations that take the open hand away from an object it let go of at `release` (m): back along
+        the grip x axis APPROACH m (straight up for a hand pointing down), then, for a hand held level, up as
+        much (it held the object's side: lifted at once, or swung back into the tuck, the fingers knock it
+        over)."""
+        x = self.world.data.site("robot/grip").xmat.reshape(3, 3)[:, 0].copy()
+        back = release - APPROACH * x
+        away = self._line(release, back, quat)
+        if away is None or np.linalg.norm(x[:2]) <= LEVEL_HAND:
+            return away
+        return away + (self._line(back, back + np.array([0.0, 0.0, APPROACH]), quat, seed=away[-1]) or [])
 
     def _let_go(self, name: str, node: str, opening: float, away: list[np.ndarray] | None,
                 inside: bool = False) -> SkillResult:
@@ -478,6 +509,9 @@ class Robot:
         if parent != node or (inside and relation != RELATION_NAMES[INSIDE]):
             return SkillResult(False, f"place: {name} ended {relation} {parent}, not {'inside' if inside else 'on'} "
                                       f"{node}")
+        body = self.world.object_body_ids[self.world.object_index(name)]
+        if self.world.data.xmat[body][8] < UPRIGHT:
+            return SkillResult(False, f"place: {name} fell over on {node}")
         return SkillResult(True)
 
     def _under_a_shelf(self, node: str, position: np.ndarray, height: float) -> bool:
@@ -523,8 +557,7 @@ class Robot:
         level = np.linalg.norm(now[:2, 0]) > LEVEL_HAND
         turn = math.atan2(-out[1], -out[0]) - (math.atan2(now[1, 0], now[0, 0]) if level else
                                                self.controller.target[2])
-        rotation = np.array([[math.cos(turn), -math.sin(turn), 0.0], [math.sin(turn), math.cos(turn), 0.0],
-                             [0.0, 0.0, 1.0]]) @ now
+        rotation = _yaw_matrix(turn) @ now
         quat = matrix_to_quat(rotation)
         up, pull = np.array([0.0, 0.0, 1.0]), np.array([out[0], out[1], 0.0])
         clear_out = np.linalg.norm(size) / 2 + ENTRY_OUT  # the object's centre this far out of the front: all out
@@ -650,6 +683,12 @@ class Robot:
     def _held_quat(self) -> np.ndarray:
         """The grip site's current orientation (wxyz), kept while carrying."""
         return matrix_to_quat(self.world.data.site("robot/grip").xmat.reshape(3, 3))
+
+
+def _yaw_matrix(angle: float) -> np.ndarray:
+    """The rotation (shape (3, 3)) by `angle` rad about the vertical."""
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def _spread(spots: list, gap: float, limit: int) -> list:
