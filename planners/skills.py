@@ -291,6 +291,8 @@ class Robot:
         reason = ungraspable_reason(cls)
         if reason is not None:
             return SkillResult(False, f"{name}: not graspable ({reason})")
+        if self._fallen_over(name):  # every grasp here is for an object standing up
+            return SkillResult(False, f"{name}: it has fallen over (lies on its side), and no grasp fits it so")
         graph = self.observer.update()
         node = node or graph.parent_of(name)
         position, quat = self.world.object_pose(name)
@@ -509,8 +511,7 @@ class Robot:
         if parent != node or (inside and relation != RELATION_NAMES[INSIDE]):
             return SkillResult(False, f"place: {name} ended {relation} {parent}, not {'inside' if inside else 'on'} "
                                       f"{node}")
-        body = self.world.object_body_ids[self.world.object_index(name)]
-        if self.world.data.xmat[body][8] < UPRIGHT:
+        if self._fallen_over(name):
             return SkillResult(False, f"place: {name} fell over on {node}")
         return SkillResult(True)
 
@@ -679,6 +680,10 @@ class Robot:
         position = self.world.object_pose(self.held)[0]
         return float(np.linalg.norm(position[:2] - self.controller.q()[:2]) + np.linalg.norm(size[:2]) / 2
                      + CLEARANCE)
+
+    def _fallen_over(self, name: str) -> bool:
+        """Whether object `name` no longer stands up (its up axis tilted past UPRIGHT)."""
+        return bool(self.world.data.xmat[self.world.object_body_ids[self.world.object_index(name)]][8] < UPRIGHT)
 
     def _held_quat(self) -> np.ndarray:
         """The grip site's current orientation (wxyz), kept while carrying."""

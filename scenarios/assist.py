@@ -212,7 +212,7 @@ class Assistant:
             if node in self.robot.navigator.furniture and self.robot.place(node).success:
                 self._event(f"robot put {obj} down on {node} after the failed place", self.executor.minute, "WARN")
                 return
-        log.warning("robot still holds %s", obj)
+        log.warning("robot still holds %s" if self.robot.held == obj else "%s left the hand on the way", obj)
 
     def _finish(self, relocation: Relocation, minute: int, done: bool, reason: str) -> None:
         query = minute if minute >= 0 else int(self.log.plans[-1][0])
