@@ -75,6 +75,13 @@ class Hold:
     until: float
     source: str = ""
 
+    def touched(self, graph: SceneGraph, used: Collection[str], grabbed_at: Mapping[str, float]) -> bool:
+        """Whether the person has used the object since the hold began: the observed graph shows it away from
+        `node`, it is in `used` (e.g. seen in the person's hand), or `grabbed_at` (object -> last minute the
+        person took it in hand) is not before `since`."""
+        return (graph.parent_of(self.obj) != self.node or self.obj in used
+                or grabbed_at.get(self.obj, -np.inf) >= self.since)
+
 
 class Holds:
     """Objects the robot placed for the person, kept where it put them (the robot's own help is not undone)."""
@@ -88,13 +95,10 @@ class Holds:
 
     def update(self, graph: SceneGraph, minute: float, used: Collection[str] = (),
                grabbed_at: Mapping[str, float] | None = None) -> list[Hold]:
-        """Release holds whose window has passed (until < minute), whose object the observed graph shows away from
-        its node (the person moved it), which are in `used` (e.g. seen in the person's hand) or which the person
-        took in hand since the hold began (`grabbed_at`: object -> last minute taken); returns them."""
+        """Release holds whose window has passed (until < minute) or whose object the person used (`Hold.touched`);
+        returns them."""
         grabbed_at = grabbed_at or {}
-        released = [h for h in self.active.values()
-                    if h.until < minute or graph.parent_of(h.obj) != h.node or h.obj in used
-                    or grabbed_at.get(h.obj, -np.inf) >= h.since]
+        released = [h for h in self.active.values() if h.until < minute or h.touched(graph, used, grabbed_at)]
         for hold in released:
             del self.active[hold.obj]
         return released
@@ -112,8 +116,7 @@ def unused_help(released: Sequence[Hold], graph: SceneGraph, used: Collection[st
     for each released hold whose object is still where the robot put it and untouched since, back to its source."""
     grabbed_at = grabbed_at or {}
     return [Relocation(h.obj, h.node, h.source, 0, 1.0, put_back=True) for h in released
-            if h.source and graph.parent_of(h.obj) == h.node and h.obj not in used
-            and grabbed_at.get(h.obj, -np.inf) < h.since]
+            if h.source and not h.touched(graph, used, grabbed_at)]
 
 
 def first_moves(observed: np.ndarray, rollout: Rollout, threshold: float, window_steps: int,
