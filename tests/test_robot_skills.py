@@ -18,10 +18,12 @@ def _others_moved(world: World, before: np.ndarray, moved: str) -> tuple[float, 
     return float(drift[k]), world.object_names[k]
 
 
-def _scene(obj: str, position: tuple[float, float, float], on: str, seed: int) -> tuple[World, Robot]:
-    """Scenario set-up: `obj` put down at `position` (m), where it must settle on furniture `on`."""
+def _scene(obj: str, position: tuple[float, float, float], on: str, seed: int,
+           quat: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)) -> tuple[World, Robot]:
+    """Scenario set-up: `obj` put down at `position` (m) turned by `quat` (wxyz), where it must settle on
+    furniture `on`."""
     world = World(extras=[add_robot])
-    world.set_object_pose(obj, position)
+    world.set_object_pose(obj, position, quat)
     world.settle()
     robot = Robot(world, np.random.default_rng(seed))
     assert robot.observer.observe_all().parent_of(obj) == on
@@ -53,6 +55,16 @@ def test_pick_reports_a_clear_reason_for_ungraspable_objects() -> None:
     result = robot.pick("mail")
     assert not result.success
     assert "mail" in result.reason and "thin" in result.reason
+
+
+def test_pick_refuses_an_object_lying_on_its_side_without_touching_anything() -> None:
+    side = (np.cos(np.pi / 4), np.sin(np.pi / 4), 0.0, 0.0)  # about x: the 0.07 m side down
+    world, robot = _scene("food_cereal", (2.6, 2.0, 0.75 + 0.035 + 0.003), "table_dining_room", seed=0, quat=side)
+    before, arm = world.object_positions(), robot.controller.q().copy()
+    result = robot.pick("food_cereal", into="cupboard")
+    assert not result.success and "fallen over" in result.reason, result.reason
+    assert np.abs(world.object_positions() - before).max() == 0.0  # refused before any move
+    assert np.abs(robot.controller.q() - arm).max() < 1e-6
 
 
 def test_robot_fetches_milk_from_the_fridge_to_the_dining_table() -> None:
