@@ -196,7 +196,7 @@ class Robot:
             q = self.tuck.copy()
             q[:3] = base
             start = self.ik.solve(q, above + entry * pull, quat, base_cost=ARC_BASE_COST)
-            if not start.converged or not self.clearance.clear(start.q):
+            if not start.converged or not self.clearance.clear(start.q) or not self._unfold_clear(base, start.q[3]):
                 continue
             path = self._checked_line(start.q, [above + entry * pull, above], quat)
             if path is None or self._checked_line(path[-1], [above, grasp.position, grasp.position + np.array(
@@ -212,6 +212,13 @@ class Robot:
                 q_in[:3] = self.controller.target[:3]  # where the base really stopped
             return path_in
         return None
+
+    def _unfold_clear(self, base: np.ndarray, torso: float) -> bool:
+        """Whether the arm unfolds from the tuck to `raised(torso)` at base pose `base` (x m, y m, yaw rad)
+        without touching anything: next to a table the folded elbow swings out over its top."""
+        tucked, raised = self.tucked(), self.raised(torso)
+        tucked[:3] = raised[:3] = base
+        return self._swing_clear(tucked, raised)
 
     def _lead_in(self, q: np.ndarray, point: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
         """The way from the raised arm to configuration q (shape (13,), the grip site at `point`, m): q alone if
@@ -229,13 +236,14 @@ class Robot:
                 return [via.q, *down]
         return None
 
-    def _swing_clear(self, q_from: np.ndarray, q_to: np.ndarray) -> bool:
-        """Whether the joint-space move q_from -> q_to (each shape (13,), base at q_to's) keeps the arm clear,
-        checked every SWING_STEP rad of the largest joint change."""
+    def _swing_clear(self, q_from: np.ndarray, q_to: np.ndarray, held: Held | None = None) -> bool:
+        """Whether the joint-space move q_from -> q_to (each shape (13,), base at q_to's) keeps the arm (and
+        `held`, an object in the hand) clear, checked every SWING_STEP rad of the largest joint change."""
         q_from = q_from.copy()
         q_from[:3] = q_to[:3]
         steps = max(1, int(np.ceil(np.max(np.abs(q_to[3:11] - q_from[3:11])) / SWING_STEP)))
-        return all(self.clearance.clear(q_from + s * (q_to - q_from)) for s in np.linspace(0.0, 1.0, steps + 1)[1:])
+        return all(self.clearance.clear(q_from + s * (q_to - q_from), held=held)
+                   for s in np.linspace(0.0, 1.0, steps + 1)[1:])
 
     def _checked_line(self, q: np.ndarray, points: list[np.ndarray], quat: np.ndarray, held: Held | None = None
                       ) -> list[np.ndarray] | None:
@@ -269,17 +277,19 @@ class Robot:
         return self._hand_line(point, matrix_to_quat(rotation), GRASP_BASE_COST, partial=True) or [
             self.controller.target.copy()]
 
-    def _hand_line(self, point: np.ndarray, quat: np.ndarray, base_cost: float, partial: bool = False
-                   ) -> list[np.ndarray] | None:
-        """`_line` from where the grip site is now to `point` (m) at orientation `quat`, turning the hand evenly
-        on the way: CARRY_STEP m and at most TURN_STEP rad between IK waypoints (at least two), every one within
-        WAYPOINT_TOL: a move between poses, not onto a grasp."""
-        start = self.world.data.site("robot/grip").xpos.copy()
-        now = self._held_quat()
+    def _hand_line(self, point: np.ndarray, quat: np.ndarray, base_cost: float, partial: bool = False,
+                   seed: np.ndarray | None = None) -> list[np.ndarray] | None:
+        """`_line` from where the grip site is now (or at configuration `seed`, shape (13,)) to `point` (m) at
+        orientation `quat`, turning the hand evenly on the way: CARRY_STEP m and at most TURN_STEP rad between IK
+        waypoints (at least two), every one within WAYPOINT_TOL: a move between poses, not onto a grasp."""
+        if seed is None:
+            start, now = self.world.data.site("robot/grip").xpos.copy(), self._held_quat()
+        else:
+            start, now = self.ik.grip_pose(seed)
         turn = 2.0 * math.acos(min(abs(float(np.dot(now, quat))), 1.0))
         steps = max(2, int(np.ceil(np.linalg.norm(point - start) / CARRY_STEP)), int(np.ceil(turn / TURN_STEP)))
         return self._line(start, point, quat, steps, base_cost=base_cost, loose_end=True, partial=partial,
-                          from_quat=now)
+                          seed=seed, from_quat=now)
 
     # --- pick --------------------------------------------------------------------------------------------
     def pick(self, name: str, node: str | None = None, into: str | None = None) -> SkillResult:
@@ -566,10 +576,11 @@ class Robot:
             release = np.array(spot.pos) + np.array([0.0, 0.0, 0.01]) - rotation @ held.position
             outside = release + (float(np.dot(front - release[:2], out)) + clear_out) * pull
             points = [outside + SIDE_LIFT * up, release + SIDE_LIFT * up, release]
-            path_in = self._drive_for(points, rotation, posture, held)
-            if path_in is None:
+            planned = self._drive_for(points, rotation, posture, held)
+            if planned is None:
                 continue
-            self._ease_to(path_in[0], quat)
+            ease, path_in = planned
+            self._ease_to(ease, path_in[0])
             if self._hand_empty():
                 self.held = None
                 self.retract()
@@ -591,21 +602,31 @@ class Robot:
         return SkillResult(False, f"place: no free base pose puts {name} into {node} without it or the arm "
                                   f"touching {node} or its contents ({len(spots)} spots tried)")
 
-    def _ease_to(self, q: np.ndarray, quat: np.ndarray) -> None:
-        """Move a held object to configuration q (shape (13,), grip orientation `quat`): along a straight grip
-        line as far as it is reachable, the rest in joint space, slowly (a quick swing turns a long object held
-        by one end in the fingers)."""
-        lead = self._hand_line(self.ik.grip_pose(q)[0], quat, ARC_BASE_COST, partial=True)
+    def _ease_path(self, q_from: np.ndarray, q_to: np.ndarray, held: Held) -> list[np.ndarray] | None:
+        """The way (configurations, each shape (13,)) of a held object from configuration q_from to q_to: along a
+        straight grip line as far as it is reachable, the rest in joint space; None if any of it touches anything.
+        """
+        lead = self._hand_line(self.ik.grip_pose(q_to)[0], self.ik.grip_pose(q_to)[1], ARC_BASE_COST,
+                               partial=True, seed=q_from) or []
+        if not all(self.clearance.clear(q, held=held) for q in lead):
+            return None
+        return lead if self._swing_clear(lead[-1] if lead else q_from, q_to, held) else None
+
+    def _ease_to(self, lead: list[np.ndarray], q: np.ndarray) -> None:
+        """Move a held object through `lead` (from `_ease_path`), then to configuration q (shape (13,)) in joint
+        space, slowly (a quick swing turns a long object held by one end in the fingers)."""
         if lead:
             self.controller.move_through(lead)
         self.controller.move_through([q], duration=EASE_SLOWDOWN * self.controller.duration(self.controller.target, q))
         self.controller.settle(0.003)
 
     def _drive_for(self, points: list[np.ndarray], rotation: np.ndarray, posture: np.ndarray, held: Held
-                   ) -> list[np.ndarray] | None:
-        """Drive, holding `held` in `posture` (shape (13,)), to a free base pose from which the grip site follows
-        `points` (m, each shape (3,)) at `rotation` (shape (3, 3)) with the object and the arm clear of the
-        apartment; returns the configurations (each shape (13,)) along them, or None (the robot stays)."""
+                   ) -> tuple[list[np.ndarray], list[np.ndarray]] | None:
+        """Drive, holding `held` in `posture` (shape (13,)), to a free base pose from which the held object eases
+        from `posture` onto the first of `points` (m, each shape (3,)) and the grip site follows them at `rotation`
+        (shape (3, 3)), the object and the arm clear of the apartment all the way; returns (the ease, see
+        `_ease_path`; the configurations along `points`), each configuration shape (13,), or None (the robot
+        stays)."""
         quat = matrix_to_quat(rotation)
         reach = self._held_reach()
         obstacles = self.navigator.open_part_rects()
@@ -620,14 +641,19 @@ class Robot:
             path = self._checked_line(start.q, points, quat, held)
             if path is None:
                 continue
+            carried = posture.copy()
+            carried[:3] = base
+            ease = self._ease_path(carried, start.q, held)
+            if ease is None:
+                continue
             try:
                 self.navigator.drive_to(base, posture, reach)
             except NavigationError:
                 continue
             path = [start.q, *path]
-            for q_in in path:
+            for q_in in [*ease, *path]:
                 q_in[:3] = self.controller.target[:3]  # where the base really stopped
-            return path
+            return ease, path
         return None
 
     # --- doors and drawers ---------------------------------------------------------------------------------
