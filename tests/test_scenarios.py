@@ -1,7 +1,7 @@
 """The breakfast scenario end to end: dataset, predictor, the assisted run, the reference, the recording.
 
-One morning is run once for the module (a fresh cache folder: the dataset is generated and the predictor trained
-as on a new machine); every check reads the observed scene graph of the assisted day, never the plan.
+One morning is run once for the module, then the same morning with breakfast skipped (a fresh cache folder: the
+dataset is generated and the predictor trained as on a new machine); every check reads the observed scene graph of the assisted day, never the plan.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from homer_sim.households import load_households
 from homer_sim.recording import read_recording
 from planners.psi import Relocation
 from scenarios.assist import AssistLog, RelocationOutcome
-from scenarios.breakfast import MorningRun, assisted_run, end_state, fetches
+from scenarios.breakfast import Morning, MorningRun, assisted_run, end_state, fetches
 from scenarios.breakfast_data import DataSpec
 from scenarios.registry import SCENARIOS, get
 
@@ -25,13 +25,22 @@ TABLE = "table_dining_room"
 PUT_AWAY = {"food_cereal": {"cupboard"}, "milk": {"fridge"}, "bowl": {"sink_dining_room", "cupboard"}}
 
 
+SPEC = DataSpec(train_days=10, test_days=1)
+
+
 @pytest.fixture(scope="module")
-def morning(tmp_path_factory: pytest.TempPathFactory) -> tuple[MorningRun, Path]:
+def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A fresh cache folder for the module: the first run generates the dataset and trains, as on a new machine."""
     folder = tmp_path_factory.mktemp("breakfast")
     with pytest.MonkeyPatch.context() as patch:
         patch.setenv("HOMER_SIM_CACHE", str(folder / "cache"))
-        rrd = folder / "breakfast.rrd"
-        return assisted_run(rrd, spec=DataSpec(train_days=10, test_days=1)), rrd
+        yield folder
+
+
+@pytest.fixture(scope="module")
+def morning(folder: Path) -> tuple[MorningRun, Path]:
+    rrd = folder / "breakfast.rrd"
+    return assisted_run(rrd, spec=SPEC), rrd
 
 
 def _where(run: MorningRun, minute: int) -> dict[str, tuple[str, int]]:
@@ -62,6 +71,19 @@ def test_the_robot_clears_up_after_breakfast(morning: tuple[MorningRun, Path]) -
     back = {r["object"] for r in run.result["relocations"] if r["done"] and r["minute"] > start
             and r["to"] in PUT_AWAY.get(r["object"], ())}
     assert back >= set(ITEMS), f"the robot put back only {sorted(back)}: {run.result['relocations']}"
+
+
+def test_on_a_skipped_breakfast_the_robot_puts_its_help_back(folder: Path, morning: tuple[MorningRun, Path]) -> None:
+    """The same morning without breakfast: what the robot set out goes back once breakfast time has passed
+    (checked at 07:30, after the 07:20 tick)."""
+    run = assisted_run(None, Morning(skip_breakfast=True, end_min=450), SPEC)
+    assert run.assist.error == "", run.assist.error
+    set_out = {r["object"] for r in run.result["relocations"] if r["done"] and r["to"] == TABLE}
+    assert set(ITEMS) <= set_out, run.result["relocations"]
+    failures = [f"{r['object']}: {r['reason']}" for r in run.result["relocations"] if not r["done"]]
+    assert run.result["left_elsewhere"] == {}, f"{run.result['left_elsewhere']}; failures: {failures}"
+    homes = {"food_cereal": "cupboard", "milk": "fridge", "bowl": "cupboard"}
+    assert {o: p for o, (p, _) in _where(run, run.assist.day.minutes[-1]).items()} == homes
 
 
 def test_relocations_are_scored_against_the_unassisted_replay(morning: tuple[MorningRun, Path]) -> None:
