@@ -1,7 +1,8 @@
 """The breakfast scenario end to end: dataset, predictor, the assisted run, the reference, the recording.
 
 One morning is run once for the module, then the same morning with breakfast skipped (a fresh cache folder: the
-dataset is generated and the predictor trained as on a new machine); every check reads the observed scene graph of the assisted day, never the plan.
+dataset is generated and the predictor trained as on a new machine); every check reads the observed scene graph
+of the assisted day, never the plan.
 """
 
 from __future__ import annotations
