@@ -17,6 +17,7 @@ from planners.robot import ACTUATORS, BODY_JOINTS, FINGER_JOINTS, GRIPPER_MAX, P
 
 CONTROL_STEPS = 5  # physics steps per control step (0.01 s at the apartment's 2 ms timestep)
 SPEED_FRACTION = 0.5  # planned peak joint speed as a fraction of the limit
+FREE_SPEED_FRACTION = 0.9  # the same for moves with nothing in the hand and nothing to touch (tuck, unfold, drive)
 MIN_DURATION = 0.3  # s
 MIN_JERK_PEAK = 1.875  # peak speed of a min-jerk profile over its mean speed
 
@@ -56,20 +57,22 @@ class Controller:
         ctrl = np.append(self.target[: self.n_body], self.grip_target)
         self.world.data.ctrl[self.actuator_ids] = ctrl - self.ctrl_offset
 
-    def duration(self, q_from: np.ndarray, q_to: np.ndarray) -> float:
-        """Time in s for a min-jerk move whose peak joint speed stays at SPEED_FRACTION of the limits."""
+    def duration(self, q_from: np.ndarray, q_to: np.ndarray, speed: float = SPEED_FRACTION) -> float:
+        """Time in s for a min-jerk move whose peak joint speed stays at `speed` of the limits."""
         delta = np.abs(q_to[: self.n_body] - q_from[: self.n_body])
-        return max(MIN_DURATION, float(np.max(MIN_JERK_PEAK * delta / (SPEED_FRACTION * self.speeds))))
+        return max(MIN_DURATION, float(np.max(MIN_JERK_PEAK * delta / (speed * self.speeds))))
 
     def move_through(self, waypoints: Sequence[np.ndarray], duration: float | None = None,
-                     grip: float | None = None, abort: Callable[[], bool] | None = None) -> bool:
+                     grip: float | None = None, abort: Callable[[], bool] | None = None,
+                     speed: float = SPEED_FRACTION) -> bool:
         """Follow configurations (each shape (13,)) from the current target, piecewise linear in joint space
-        with one min-jerk time scaling over the whole path; returns False if `abort()` became True."""
+        with one min-jerk time scaling over the whole path; returns False if `abort()` became True. Without a
+        `duration`, each segment takes as long as a min-jerk move of its own at `speed` (see `duration`)."""
         path = np.array([self.target] + [np.asarray(w, dtype=float) for w in waypoints])
         seg = np.linalg.norm((path[1:] - path[:-1])[:, : self.n_body] / self.speeds, axis=1)
         total = float(seg.sum())
         if duration is None:
-            duration = sum(self.duration(a, b) for a, b in zip(path[:-1], path[1:], strict=True))
+            duration = sum(self.duration(a, b, speed) for a, b in zip(path[:-1], path[1:], strict=True))
             duration = max(duration, MIN_DURATION)
         cumulative = np.concatenate([[0.0], np.cumsum(seg)]) / (total if total > 0 else 1.0)
         dt = CONTROL_STEPS * self.world.model.opt.timestep

@@ -16,7 +16,7 @@ from homer_sim.floorplan import find_path, floor_plan, inflate, path_length
 from homer_sim.furniture import local_to_world
 from homer_sim.placement import base_height
 from homer_sim.validate import ROBOT_RADIUS, access_sides
-from planners.control import Controller
+from planners.control import SPEED_FRACTION, Controller
 
 STAND_DISTANCES = np.arange(0.34, 0.81, 0.02)  # m from the furniture's front face to the base centre
 STAND_OFFSETS = np.array([0.0, 0.05, -0.05, 0.1, -0.1, 0.15, -0.15, 0.2, -0.2, 0.3, -0.3, 0.4, -0.4])  # m along
@@ -122,9 +122,11 @@ class Navigator:
             raise NavigationError(f"no path from {np.round(start, 2).tolist()} to {np.round(goal[:2], 2).tolist()}")
         return path
 
-    def drive_to(self, goal: tuple[float, float, float], tuck: np.ndarray, reach: float = ROBOT_RADIUS) -> float:
+    def drive_to(self, goal: tuple[float, float, float], tuck: np.ndarray, reach: float = ROBOT_RADIUS,
+                 speed: float = SPEED_FRACTION) -> float:
         """Drive the base to `goal` (x m, y m, yaw rad) with the torso and arm at `tuck` (shape (13,)), keeping
-        `reach` m from open doors (see `path_to`); returns the path length in m."""
+        `reach` m from open doors (see `path_to`), every joint's peak speed at `speed` of its limit; returns the
+        path length in m."""
         path = self.path_to(goal, reach)
         keep = path[1:-1][::WAYPOINT_STRIDE] + [path[-1]]
         q0 = self.controller.target.copy()
@@ -138,8 +140,8 @@ class Navigator:
         if np.max(np.abs(self.controller.target[3:11] - tuck[3:11])) > 1e-3:  # tuck first, on the spot
             q = tuck.copy()
             q[:3] = q0[:3]
-            self.controller.move_through([q])
-        self.controller.move_through(waypoints)
+            self.controller.move_through([q], speed=speed)
+        self.controller.move_through(waypoints, speed=speed)
         self.controller.settle(0.005, max_seconds=2.0)
         return path_length(path)
 

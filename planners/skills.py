@@ -18,7 +18,7 @@ from homer_sim.placement import place_world
 from homer_sim.spots import Spots
 from homer_sim.validate import ROBOT_RADIUS
 from planners.articulate import base_candidates
-from planners.control import Controller
+from planners.control import FREE_SPEED_FRACTION, SPEED_FRACTION, Controller
 from planners.door_skills import ARC_BASE_COST, ClearanceCheck, Held, PartMover
 from planners.grasps import (
     Grasp,
@@ -127,18 +127,24 @@ class Robot:
         return q
 
     def reach(self, q_goal: np.ndarray, grip: float | None = None) -> None:
-        """Move to configuration q_goal (shape (13,)); from the tuck posture through `raised`."""
+        """Move to configuration q_goal (shape (13,)); from the tuck posture straight there if that swing touches
+        nothing, else through `raised`, quicker (the hand is empty)."""
         if self.folded:
-            self.controller.move_through([self.raised(q_goal[3]), q_goal], grip=grip)
+            via = [] if self._swing_clear(self.controller.target, q_goal) else [self.raised(q_goal[3])]
+            self.controller.move_through([*via, q_goal], grip=grip, speed=FREE_SPEED_FRACTION)
         else:
             self.controller.move_through([q_goal], grip=grip)
         self.folded = False
 
     def retract(self) -> None:
-        """Tuck the arm in place through `raised` (the base and the torso stay)."""
+        """Tuck the arm in place (the base and the torso stay): with an empty hand straight there if that swing
+        touches nothing, quicker; else through `raised`."""
         if not self.folded:
-            raised = self.raised(self.controller.target[3])
-            self.controller.move_through([raised, self.tucked()])
+            tucked = self.tucked()
+            if self.held is None and self._swing_clear(self.controller.target, tucked):
+                self.controller.move_through([tucked], speed=FREE_SPEED_FRACTION)
+            else:
+                self.controller.move_through([self.raised(self.controller.target[3]), tucked])
         self.folded = True
 
     def tucked(self) -> np.ndarray:
@@ -178,7 +184,7 @@ class Robot:
                     position = self.world.object_pose(self.held)[0]
                     short = position[2] - half_height < surface_z + PASS_OVER
         self.navigator.drive_to(self.navigator.stand_pose(node, tuple(target_xy), reach if short else 0.0), posture,
-                                reach)
+                                reach, FREE_SPEED_FRACTION if self.held is None else SPEED_FRACTION)
         return short
 
     def _go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float) -> list[np.ndarray] | None:
@@ -206,7 +212,7 @@ class Robot:
             if lead is None:
                 continue
             self.retract()
-            self.navigator.drive_to(base, self.tucked())
+            self.navigator.drive_to(base, self.tucked(), speed=FREE_SPEED_FRACTION)
             path_in = [*lead, *path]
             for q_in in path_in:
                 q_in[:3] = self.controller.target[:3]  # where the base really stopped
@@ -329,7 +335,7 @@ class Robot:
             if furniture is None:  # on the floor of a room
                 goal = self.navigator.stand_near(tuple(position[:2]))
                 self.retract()
-                self.navigator.drive_to(goal, self.tucked())
+                self.navigator.drive_to(goal, self.tucked(), speed=FREE_SPEED_FRACTION)
             else:
                 self.go_to(node, position[:2])
         except NavigationError as error:
