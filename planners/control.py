@@ -18,6 +18,9 @@ from planners.robot import ACTUATORS, BODY_JOINTS, FINGER_JOINTS, GRIPPER_MAX, P
 CONTROL_STEPS = 5  # physics steps per control step (0.01 s at the apartment's 2 ms timestep)
 SPEED_FRACTION = 0.5  # planned peak joint speed as a fraction of the limit
 FREE_SPEED_FRACTION = 0.9  # the same for moves with nothing in the hand and nothing to touch (tuck, unfold, drive)
+FREE_RAMP = 1.0  # s over which such a move reaches and leaves that speed when it is long enough to cruise
+FREE_MOTION = {"speed": FREE_SPEED_FRACTION, "ramp": FREE_RAMP}  # keyword arguments of move_through, drive_to
+CARRY_MOTION = {"speed": SPEED_FRACTION, "ramp": 2.0}  # a drive with an object in the hand: gently up to speed
 MIN_DURATION = 0.3  # s
 MIN_JERK_PEAK = 1.875  # peak speed of a min-jerk profile over its mean speed
 
@@ -26,6 +29,18 @@ def min_jerk(s: np.ndarray | float) -> np.ndarray | float:
     """Min-jerk time scaling: 0 -> 0, 1 -> 1 with zero velocity and acceleration at both ends."""
     s = np.clip(s, 0.0, 1.0)
     return s**3 * (10.0 - 15.0 * s + 6.0 * s**2)
+
+
+def cruise(t: float, duration: float, ramp: float) -> float:
+    """Cruise time scaling over `duration` s (more than 2 `ramp`): 0 -> 1, the speed rising smoothly (smoothstep)
+    over the first `ramp` s, constant, and falling over the last `ramp` s (zero velocity at both ends)."""
+    peak = 1.0 / (duration - ramp)
+    t = min(max(t, 0.0), duration)
+    edge = min(t, duration - t) / ramp
+    if edge < 1.0:  # on a ramp: the integral of the smoothstep speed
+        part = peak * ramp * (edge**3 - edge**4 / 2.0)
+        return part if t < duration / 2.0 else 1.0 - part
+    return peak * (ramp / 2.0 + t - ramp)
 
 
 class Controller:
@@ -64,20 +79,28 @@ class Controller:
 
     def move_through(self, waypoints: Sequence[np.ndarray], duration: float | None = None,
                      grip: float | None = None, abort: Callable[[], bool] | None = None,
-                     speed: float = SPEED_FRACTION) -> bool:
+                     speed: float = SPEED_FRACTION, ramp: float | None = None) -> bool:
         """Follow configurations (each shape (13,)) from the current target, piecewise linear in joint space
         with one min-jerk time scaling over the whole path; returns False if `abort()` became True. Without a
-        `duration`, each segment takes as long as a min-jerk move of its own at `speed` (see `duration`)."""
+        `duration`, each segment takes as long as a min-jerk move of its own at `speed` (see `duration`). With
+        `ramp` (s; no `duration`), a path longer than 2 `ramp` at `speed` is cruised instead: each joint at most
+        at `speed` of its limit, that speed reached and left over `ramp` s (see `cruise`)."""
         path = np.array([self.target] + [np.asarray(w, dtype=float) for w in waypoints])
         seg = np.linalg.norm((path[1:] - path[:-1])[:, : self.n_body] / self.speeds, axis=1)
         total = float(seg.sum())
-        if duration is None:
+        cruising = duration is None and ramp is not None and total / speed > 2.0 * ramp
+        if cruising:
+            duration = total / speed + ramp
+        elif duration is None:
             duration = sum(self.duration(a, b, speed) for a, b in zip(path[:-1], path[1:], strict=True))
             duration = max(duration, MIN_DURATION)
         cumulative = np.concatenate([[0.0], np.cumsum(seg)]) / (total if total > 0 else 1.0)
         dt = CONTROL_STEPS * self.world.model.opt.timestep
         for k in range(1, int(np.ceil(duration / dt)) + 1):
-            s = float(min_jerk(k * dt / duration)) if total > 0 else 1.0
+            if total == 0:
+                s = 1.0
+            else:
+                s = cruise(k * dt, duration, ramp) if cruising else float(min_jerk(k * dt / duration))
             i = min(int(np.searchsorted(cumulative, s, side="right")) - 1, len(seg) - 1)
             u = 0.0 if seg[i] == 0 else (s - cumulative[i]) / (cumulative[i + 1] - cumulative[i])
             self.command(path[i] + np.clip(u, 0.0, 1.0) * (path[i + 1] - path[i]), grip)

@@ -36,7 +36,7 @@ from planners.articulate import (
     handle_grasp,
     segment_distance,
 )
-from planners.control import FREE_SPEED_FRACTION, robot_geom_ids
+from planners.control import FREE_MOTION, robot_geom_ids
 from planners.navigation import CLEARANCE, NavigationError
 from planners.robot import ARM_GEOMS, PREFIX
 
@@ -221,7 +221,7 @@ class PartMover:
         """Drive to the planned base pose, reach in front of the grasp, move in and close the fingers."""
         robot = self.robot
         robot.retract()
-        self.navigator.drive_to(tuple(q_pre[:3]), robot.tucked(), speed=FREE_SPEED_FRACTION)
+        self.navigator.drive_to(tuple(q_pre[:3]), robot.tucked(), **FREE_MOTION)
         robot.reach(q_pre, grip=PRE_OPENING)
         self.controller.settle(0.003)
         self.controller.move_through([q_grasp])

@@ -123,10 +123,10 @@ class Navigator:
         return path
 
     def drive_to(self, goal: tuple[float, float, float], tuck: np.ndarray, reach: float = ROBOT_RADIUS,
-                 speed: float = SPEED_FRACTION) -> float:
+                 speed: float = SPEED_FRACTION, ramp: float | None = None) -> float:
         """Drive the base to `goal` (x m, y m, yaw rad) with the torso and arm at `tuck` (shape (13,)), keeping
-        `reach` m from open doors (see `path_to`), every joint's peak speed at `speed` of its limit; returns the
-        path length in m."""
+        `reach` m from open doors (see `path_to`), every joint's peak speed at `speed` of its limit (cruising with
+        `ramp`, see `Controller.move_through`); returns the path length in m."""
         path = self.path_to(goal, reach)
         keep = path[1:-1][::WAYPOINT_STRIDE] + [path[-1]]
         q0 = self.controller.target.copy()
@@ -140,8 +140,8 @@ class Navigator:
         if np.max(np.abs(self.controller.target[3:11] - tuck[3:11])) > 1e-3:  # tuck first, on the spot
             q = tuck.copy()
             q[:3] = q0[:3]
-            self.controller.move_through([q], speed=speed)
-        self.controller.move_through(waypoints, speed=speed)
+            self.controller.move_through([q], speed=speed, ramp=ramp)
+        self.controller.move_through(waypoints, speed=speed, ramp=ramp)
         self.controller.settle(0.005, max_seconds=2.0)
         return path_length(path)
 

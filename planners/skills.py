@@ -18,7 +18,7 @@ from homer_sim.placement import place_world
 from homer_sim.spots import Spots
 from homer_sim.validate import ROBOT_RADIUS
 from planners.articulate import base_candidates
-from planners.control import FREE_SPEED_FRACTION, SPEED_FRACTION, Controller
+from planners.control import CARRY_MOTION, FREE_MOTION, Controller
 from planners.door_skills import ARC_BASE_COST, ClearanceCheck, Held, PartMover
 from planners.grasps import (
     Grasp,
@@ -131,7 +131,7 @@ class Robot:
         nothing, else through `raised`, quicker (the hand is empty)."""
         if self.folded:
             via = [] if self._swing_clear(self.controller.target, q_goal) else [self.raised(q_goal[3])]
-            self.controller.move_through([*via, q_goal], grip=grip, speed=FREE_SPEED_FRACTION)
+            self.controller.move_through([*via, q_goal], grip=grip, **FREE_MOTION)
         else:
             self.controller.move_through([q_goal], grip=grip)
         self.folded = False
@@ -142,7 +142,7 @@ class Robot:
         if not self.folded:
             tucked = self.tucked()
             if self.held is None and self._swing_clear(self.controller.target, tucked):
-                self.controller.move_through([tucked], speed=FREE_SPEED_FRACTION)
+                self.controller.move_through([tucked], **FREE_MOTION)
             else:
                 self.controller.move_through([self.raised(self.controller.target[3]), tucked])
         self.folded = True
@@ -184,7 +184,7 @@ class Robot:
                     position = self.world.object_pose(self.held)[0]
                     short = position[2] - half_height < surface_z + PASS_OVER
         self.navigator.drive_to(self.navigator.stand_pose(node, tuple(target_xy), reach if short else 0.0), posture,
-                                reach, FREE_SPEED_FRACTION if self.held is None else SPEED_FRACTION)
+                                reach, **(FREE_MOTION if self.held is None else CARRY_MOTION))
         return short
 
     def _go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float) -> list[np.ndarray] | None:
@@ -212,7 +212,7 @@ class Robot:
             if lead is None:
                 continue
             self.retract()
-            self.navigator.drive_to(base, self.tucked(), speed=FREE_SPEED_FRACTION)
+            self.navigator.drive_to(base, self.tucked(), **FREE_MOTION)
             path_in = [*lead, *path]
             for q_in in path_in:
                 q_in[:3] = self.controller.target[:3]  # where the base really stopped
@@ -335,7 +335,7 @@ class Robot:
             if furniture is None:  # on the floor of a room
                 goal = self.navigator.stand_near(tuple(position[:2]))
                 self.retract()
-                self.navigator.drive_to(goal, self.tucked(), speed=FREE_SPEED_FRACTION)
+                self.navigator.drive_to(goal, self.tucked(), **FREE_MOTION)
             else:
                 self.go_to(node, position[:2])
         except NavigationError as error:
@@ -485,7 +485,7 @@ class Robot:
         if short and self._grip_line(np.array([*grip.xpos[:2], max(grip.xpos[2], release[2] + PASS_OVER)]), quat):
             try:
                 self.navigator.drive_to(self.navigator.stand_pose(node, tuple(target[:2])),
-                                        self.controller.target.copy())
+                                        self.controller.target.copy(), **CARRY_MOTION)
             except NavigationError:
                 pass  # reach from where it stands
         if not self._grip_line(above, quat):
@@ -653,7 +653,7 @@ class Robot:
             if ease is None:
                 continue
             try:
-                self.navigator.drive_to(base, posture, reach)
+                self.navigator.drive_to(base, posture, reach, **CARRY_MOTION)
             except NavigationError:
                 continue
             path = [start.q, *path]

@@ -23,7 +23,7 @@ from homer_sim.executor import DayLog, Executor
 from homer_sim.graph import INSIDE, ON, GraphError, SceneGraph
 from homer_sim.recording import RecordedWorld
 from homer_sim.world import World
-from planners.control import FREE_SPEED_FRACTION
+from planners.control import FREE_MOTION
 from planners.grasps import ungraspable_reason
 from planners.navigation import NavigationError
 from planners.psi import Holds, Plan, PlanStep, Relocation, psi, unused_help
@@ -231,7 +231,7 @@ class Assistant:
         """Back to the parking pose with the arm tucked, out of the person's way."""
         try:
             self.robot.retract()
-            self.robot.navigator.drive_to(DEFAULT_POSE, self.robot.tucked(), speed=FREE_SPEED_FRACTION)
+            self.robot.navigator.drive_to(DEFAULT_POSE, self.robot.tucked(), **FREE_MOTION)
         except NavigationError as error:
             log.warning("robot could not park: %s", error)
 
