@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from homer_sim.world import World
-from planners.control import Controller
+from planners.control import Controller, cruise
 from planners.ik import IKError, IKSolver
 from planners.robot import DEFAULT_POSE, PAD_GEOMS, ROBOT_XML, add_robot, robot_at
 
@@ -117,3 +117,16 @@ def test_controller_tracks_ik_targets_in_physics(world: World, solver: IKSolver)
     controller.settle(0.002)
     assert np.linalg.norm(world.data.site("robot/grip").xpos - target) < 0.005
     assert world.warnings() == 0
+
+
+def test_cruise_scaling_reaches_its_peak_speed_smoothly_and_ends_at_rest() -> None:
+    duration, ramp = 5.0, 1.0
+    t = np.linspace(0.0, duration, 5001)
+    s = np.array([cruise(x, duration, ramp) for x in t])
+    speed = np.diff(s) / np.diff(t)
+    assert s[0] == 0.0 and s[-1] == pytest.approx(1.0) and np.all(np.diff(s) > 0.0)
+    assert speed.max() == pytest.approx(1.0 / (duration - ramp), rel=1e-3)  # the cruise: 1 over duration - ramp
+    assert speed[0] < 1e-3 and speed[-1] < 1e-3  # at rest at both ends
+    assert np.abs(np.diff(speed)).max() < 1e-3  # no jump in speed: the ramps are smooth
+    middle = (t > ramp) & (t < duration - ramp)
+    assert np.allclose(speed[middle[1:]], 1.0 / (duration - ramp))
