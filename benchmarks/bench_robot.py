@@ -4,8 +4,9 @@
 
 IK: `solve_ik_steps_per_s` counts single differential-IK steps (one QP each); `solves_per_s` counts complete
 solves to 5 mm / 2 degrees for random reachable targets near the current grip pose (the controller's typical
-request). Relocation: the bowl from the right kitchen counter to the dining-room sink (navigate, pick,
-navigate, place), wall time in s.
+request). Relocations, wall time in s: the bowl from the right kitchen counter to the dining-room sink (navigate,
+pick, navigate, place), and the milk from the fridge to the dining table (navigate, open the fridge, pick,
+navigate, place, navigate, close the fridge).
 Usage: python benchmarks/bench_robot.py [--repeats N]
 """
 
@@ -50,14 +51,20 @@ def bench_ik(n: int, rng: np.random.Generator) -> dict[str, float]:
             "mean_iterations": steps / n}
 
 
-def bench_relocation() -> dict[str, float | bool]:
+def bench_relocation(with_door: bool) -> dict[str, float | bool]:
     world = World(extras=[add_robot])
-    world.set_object_pose("bowl", (5.0, 0.45, 0.938))
+    if not with_door:
+        world.set_object_pose("bowl", (5.0, 0.45, 0.938))
     world.settle()
-    robot = Robot(world, np.random.default_rng(0))
+    robot = Robot(world, np.random.default_rng(0 if not with_door else 5))
     robot.observer.observe_all()
     start, physics = time.perf_counter(), world.data.time
-    ok = robot.pick("bowl").success and robot.place("sink_dining_room").success
+    if with_door:
+        steps = (lambda: robot.open_articulation("fridge/door"), lambda: robot.pick("milk"),
+                 lambda: robot.place("table_dining_room"), lambda: robot.close_articulation("fridge/door"))
+    else:
+        steps = (lambda: robot.pick("bowl"), lambda: robot.place("sink_dining_room"))
+    ok = all(step().success for step in steps)
     return {"wall_s": time.perf_counter() - start, "physics_s": world.data.time - physics, "success": ok}
 
 
@@ -71,7 +78,8 @@ def main(argv: list[str] | None = None) -> None:
     rng = np.random.default_rng(0)
     ik_runs = [bench_ik(args.solves, rng) for _ in range(args.repeats)]
     log.info("IK done")
-    relocations = [bench_relocation() for _ in range(args.repeats)]
+    relocations = [bench_relocation(False) for _ in range(args.repeats)]
+    fetches = [bench_relocation(True) for _ in range(args.repeats)]
     emit({
         "machine": machine_info(cpu),
         "ik_solves_per_s": summary([r["solves_per_s"] for r in ik_runs], 1),
@@ -84,6 +92,10 @@ def main(argv: list[str] | None = None) -> None:
         "relocation_wall_s": summary([r["wall_s"] for r in relocations], 3),
         "relocation_physics_s": relocations[0]["physics_s"],
         "relocation_success": all(r["success"] for r in relocations),
+        "relocation_with_door": "milk fridge -> table_dining_room (open the fridge, pick, place, close it)",
+        "relocation_with_door_wall_s": summary([r["wall_s"] for r in fetches], 3),
+        "relocation_with_door_physics_s": fetches[0]["physics_s"],
+        "relocation_with_door_success": all(r["success"] for r in fetches),
         "relocation_target_s": TARGET_RELOCATION_S,
     })
 
