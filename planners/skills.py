@@ -612,8 +612,7 @@ class Robot:
         """The way (configurations, each shape (13,)) of a held object from configuration q_from to q_to: along a
         straight grip line as far as it is reachable, the rest in joint space; None if any of it touches anything.
         """
-        lead = self._hand_line(self.ik.grip_pose(q_to)[0], self.ik.grip_pose(q_to)[1], ARC_BASE_COST,
-                               partial=True, seed=q_from) or []
+        lead = self._hand_line(*self.ik.grip_pose(q_to), ARC_BASE_COST, partial=True, seed=q_from) or []
         if not all(self.clearance.clear(q, held=held) for q in lead):
             return None
         return lead if self._swing_clear(lead[-1] if lead else q_from, q_to, held) else None

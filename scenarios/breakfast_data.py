@@ -138,7 +138,6 @@ def data_folder(generator, spec: DataSpec) -> Path:
     return cache_root() / f"{spec.household}_{spec.train_days}+{spec.test_days}d_seed{spec.seed}_{digest}"
 
 
-
 def ensure_dataset(generator, spec: DataSpec) -> tuple[Dataset, float]:
     """The dataset of `spec.household` (generated where missing, day by day, resumable); returns it and the wall
     seconds spent generating (0 when everything was cached)."""
