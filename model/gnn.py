@@ -76,6 +76,28 @@ def neighbour_sums(weight: torch.Tensor, edge: torch.Tensor) -> torch.Tensor:
     return torch.cat([weighted.sum(2), weighted.sum(1)], dim=-1)  # a loop of small copies over a transposed view
 
 
+class _ReluMatvec(torch.autograd.Function):
+    """relu(hidden) @ weight + bias over the last axis, hidden (..., H), weight (H,), bias () -> (...).
+
+    Autograd's own backward hands ReLU a broadcast (stride 0) gradient, grad (...) times weight (H,), and ReLU's
+    backward over that ran at a tenth of memory speed (43% of a training step). Here the gradient is made
+    contiguous first.
+    """
+
+    @staticmethod
+    def forward(ctx, hidden: torch.Tensor, weight: torch.Tensor, bias: torch.Tensor) -> torch.Tensor:
+        active = torch.relu(hidden)
+        ctx.save_for_backward(active, weight)
+        return active @ weight + bias
+
+    @staticmethod
+    def backward(ctx, grad: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        active, weight = ctx.saved_tensors
+        grad_hidden = torch.ops.aten.threshold_backward(grad[..., None] * weight, active, 0.0)
+        grad_weight = active.reshape(-1, weight.shape[0]).T @ grad.reshape(-1)
+        return grad_hidden, grad_weight, grad.sum()
+
+
 class PairReadout(nn.Module):
     """MLP over [e_ij, sums of i, sums of j, time code] -> one value per pair, its first layer factored by part."""
 
@@ -99,7 +121,7 @@ class PairReadout(nn.Module):
 
     def activate(self, hidden: torch.Tensor) -> torch.Tensor:
         """Output layer over ReLU(hidden): (B, R, N, H) -> (B, R, N); a mat-vec, far faster than Linear(H, 1)."""
-        return torch.relu_(hidden) @ self.out.weight[0] + self.out.bias[0]
+        return _ReluMatvec.apply(hidden, self.out.weight[0], self.out.bias[0])
 
     def forward(self, edge: torch.Tensor, sums_i: torch.Tensor, sums_j: torch.Tensor, code: torch.Tensor
                 ) -> torch.Tensor:

@@ -11,7 +11,7 @@ import torch
 from homer_sim.dataset import Dataset, write_day, write_meta
 from homer_sim.graph import ON
 from model.evaluate import FitSpec, evaluate, fit_tuned, split_days
-from model.gnn import GNNConfig, ObjectGraphNet, neighbour_sums
+from model.gnn import GNNConfig, ObjectGraphNet, PairReadout, neighbour_sums
 from model.synthetic import Apartment, day_from_events
 from model.train import adjacency
 
@@ -52,6 +52,20 @@ def test_neighbour_sums_by_hand() -> None:
     sums = neighbour_sums(weight, edge)  # (1, 2, 4): [outgoing (2), incoming (2)]
     assert sums[0, 0].tolist() == [2.0, 3.0, 8.0, 10.0]  # out: 1 * e_01; in: 2 * e_10
     assert sums[0, 1].tolist() == [8.0, 10.0, 2.0, 3.0]
+
+
+def test_readout_gradients_equal_autograds_own_through_relu_and_the_output_layer() -> None:
+    torch.manual_seed(0)
+    readout = PairReadout(hidden=4, time_width=2).double()
+    hidden = torch.randn(2, 3, 5, 4, dtype=torch.float64, requires_grad=True)
+    upstream = torch.randn(2, 3, 5, dtype=torch.float64)
+    ours = torch.autograd.grad((readout.activate(hidden.clone()) * upstream).sum(),
+                               [hidden, readout.out.weight, readout.out.bias])
+    plain = (readout.out(torch.relu(hidden))[..., 0] * upstream).sum()
+    expected = torch.autograd.grad(plain, [hidden, readout.out.weight, readout.out.bias])
+    assert float(ours[0].abs().max()) > 0.1 and int((ours[0] == 0).sum()) > 0  # ReLU both passes and blocks
+    for got, want in zip(ours, expected, strict=True):
+        torch.testing.assert_close(got, want.reshape(got.shape), atol=1e-12, rtol=1e-12)
 
 
 @pytest.mark.parametrize("config", [{}, {"attention": False}, {"time_encoding": "linear"}])
