@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +14,7 @@ from homer_sim.graph import ON
 from model.evaluate import FitSpec, evaluate, fit_tuned, split_days
 from model.gnn import GNNConfig, ObjectGraphNet, PairReadout, neighbour_sums
 from model.synthetic import Apartment, day_from_events
-from model.train import adjacency
+from model.train import adjacency, keep_freed_memory
 
 NODES = ("kitchen", "office", "table", "desk", "shelf", "mug", "book", "pen")
 CATEGORIES = ("room", "room", "furniture", "furniture", "furniture", "object", "object", "object")
@@ -44,6 +45,11 @@ def test_factored_first_layer_equals_a_linear_layer_over_the_one_hot_concatenati
     inputs = torch.cat([inputs[None].expand(2, -1, -1, -1), adj[..., None]], dim=-1)  # (2, N, N, 2N + 1)
     expected = model.embed(torch.relu(dense(inputs)))
     torch.testing.assert_close(model.pair_features(adj), expected, atol=1e-6, rtol=1e-5)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt")
+def test_glibc_takes_the_keep_freed_memory_setting() -> None:
+    assert keep_freed_memory() is True
 
 
 def test_neighbour_sums_by_hand() -> None:
