@@ -35,6 +35,7 @@ from model.evaluate import (  # noqa: E402
     CURVE_WINDOWS_MIN,
     HEADLINE_WINDOW_MIN,
     FitSpec,
+    days_fingerprint,
     fit_tuned,
     household_result,
     household_split,
@@ -55,11 +56,18 @@ TABLE_WINDOWS = (HEADLINE_WINDOW_MIN, 40)
 
 
 class Runs:
-    """runs.json: run key -> record; written atomically after every run."""
+    """runs.json: the dataset's fingerprint and run key -> record; written atomically after every run.
 
-    def __init__(self, path: Path) -> None:
-        self.path = path
-        self.records: dict[str, dict] = json.loads(path.read_text()) if path.is_file() else {}
+    Results of one dataset only: resuming onto another (regenerated with other code or seed) is refused.
+    """
+
+    def __init__(self, path: Path, dataset: str) -> None:
+        self.path, self.dataset = path, dataset
+        saved = json.loads(path.read_text()) if path.is_file() else {"dataset": dataset, "runs": {}}
+        if saved.get("dataset") != dataset:
+            raise SystemExit(f"{path} holds runs on dataset {saved.get('dataset')}, not on this one ({dataset}); "
+                             "use another --out or move the file away")
+        self.records: dict[str, dict] = saved["runs"]
 
     def done(self, key: str) -> bool:
         return key in self.records
@@ -67,8 +75,14 @@ class Runs:
     def add(self, key: str, record: dict) -> None:
         self.records[key] = record
         tmp = self.path.with_suffix(".json.tmp")
-        tmp.write_text(json.dumps(self.records, indent=1, sort_keys=True))
+        tmp.write_text(json.dumps({"dataset": self.dataset, "runs": self.records}, indent=1, sort_keys=True))
         os.replace(tmp, self.path)
+
+
+def dataset_fingerprint(dataset: Dataset) -> str:
+    """Digest of every day of every household and split (what the results depend on)."""
+    return days_fingerprint([day for house in dataset.meta.households for split in ("train", "test")
+                             for day in dataset.load(house, split)])
 
 
 def run_one(dataset: Dataset, house: str, method: str, days: int | None, folder: Path,
@@ -100,13 +114,11 @@ def pretrained(dataset: Dataset, house: str, folder: Path) -> Path:
 
 
 def plan(dataset: Dataset, experiments: list[str], households: list[str], methods: list[str]) -> list[tuple]:
-    """(key, household, method, days, pretrain?) of every run, in order: one experiment for every household
-    before the next, so that a partial run already gives whole tables."""
+    """(key, household, method, days, pretrain?) of every run, in the order of `experiments`: one experiment for
+    every household before the next, so that a partial run already gives whole tables."""
     runs = []
     n_train = {house: len(dataset.day_indices(house, "train")) for house in households}
-    for experiment in EXPERIMENTS:
-        if experiment not in experiments:
-            continue
+    for experiment in experiments:
         for house in households:
             n = n_train[house]
             if experiment == "main":
@@ -215,7 +227,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=Path, required=True, help="dataset folder")
     parser.add_argument("--out", type=Path, required=True, help="output folder (runs.json, checkpoints, files)")
-    parser.add_argument("--experiments", default=",".join(EXPERIMENTS), help=f"from {', '.join(EXPERIMENTS)}")
+    parser.add_argument("--experiments", default=",".join(EXPERIMENTS),
+                        help=f"from {', '.join(EXPERIMENTS)}, run in the order given")
     parser.add_argument("--households", default=None, help="comma-separated subset (default all)")
     parser.add_argument("--methods", default=",".join(DEFAULT_METHODS), help="methods of the main experiment")
     args = parser.parse_args()
@@ -227,7 +240,7 @@ def main() -> None:
     dataset = Dataset(args.data)
     households = args.households.split(",") if args.households else list(dataset.meta.households)
     args.out.mkdir(parents=True, exist_ok=True)
-    runs = Runs(args.out / "runs.json")
+    runs = Runs(args.out / "runs.json", dataset_fingerprint(dataset))
     execute(dataset, runs, plan(dataset, experiments, households, args.methods.split(",")), args.out / "checkpoints")
     json.dump(write_outputs(runs.records, args.out), sys.stdout, indent=1)
     sys.stdout.write("\n")
