@@ -3,9 +3,10 @@
 
     .venv/bin/python benchmarks/bench_model.py [--train-days 50] [--rollout-steps 200] [--data DIR]
 
-Uses at most 2 torch threads. Training: 50 synthetic days (45 fit + 5 validation) of the 123-node apartment
+Uses `--threads` torch threads (2). Training: 50 synthetic days (45 fit + 5 validation) of the 123-node apartment
 (87 movable objects), default GNNConfig (hidden 20, Adam 1e-3, batch 32, patience 4). Rollout: B = 1 graph,
-`--rollout-steps` steps fed back after 5 warm-up steps; also the per-graph cost in batches of 64.
+`--rollout-steps` steps fed back after 5 warm-up steps; also the per-graph cost in the batches that
+evaluation rollouts use (model.train.ROLLOUT_CHUNK graphs).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from homer_sim.dataset import Dataset  # noqa: E402
 from model.evaluate import split_days  # noqa: E402
 from model.gnn import GNNConfig  # noqa: E402
 from model.synthetic import write_synthetic_dataset  # noqa: E402
-from model.train import GNNPredictor, adjacency  # noqa: E402
+from model.train import ROLLOUT_CHUNK, GNNPredictor, adjacency  # noqa: E402
 
 TARGET_TRAIN_S = 600.0
 TARGET_ROLLOUT_MS = 5.0
@@ -75,11 +76,12 @@ def bench_rollout(predictor: GNNPredictor, dataset: Dataset, household: str, ste
             started = time.perf_counter()
             probs = model.step(probs, minute + 10.0 * (s + 1))
             times.append((time.perf_counter() - started) * 1000)
-        batch = adjacency(torch.as_tensor(day.parent[:64].astype(np.int64)), predictor.n_nodes)
+        batch = adjacency(torch.as_tensor(day.parent[:ROLLOUT_CHUNK].astype(np.int64)), predictor.n_nodes)
         started = time.perf_counter()
-        for s in range(3):
-            batch = model.step(batch, torch.as_tensor(day.minutes[:64], dtype=torch.float32) + 10.0 * (s + 1))
-        batched = (time.perf_counter() - started) * 1000 / (3 * 64)
+        for s in range(steps):
+            minute = torch.as_tensor(day.minutes[:ROLLOUT_CHUNK], dtype=torch.float32) + 10.0 * (s + 1)
+            batch = model.step(batch, minute)
+        batched = (time.perf_counter() - started) * 1000 / (steps * ROLLOUT_CHUNK)
     return {"ms_per_step": {"median": round(statistics.median(times), 3), "min": round(min(times), 3),
                             "max": round(max(times), 3)}, "steps": steps,
             "batched_ms_per_graph_step": round(batched, 3),
@@ -93,9 +95,11 @@ def main() -> None:
     parser.add_argument("--train-days", type=int, default=50)
     parser.add_argument("--rollout-steps", type=int, default=200)
     parser.add_argument("--max-epochs", type=int, default=None, help="cap epochs (default: GNNConfig's)")
+    parser.add_argument("--threads", type=int, default=2, help="torch threads (2; 1 is faster for B = 1 rollouts "
+                        "on a busy machine)")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(asctime)s %(name)s: %(message)s")
-    torch.set_num_threads(min(2, torch.get_num_threads()))
+    torch.set_num_threads(args.threads)
     with tempfile.TemporaryDirectory() as tmp:
         root = args.data or Path(tmp)
         if args.data is None:

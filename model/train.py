@@ -24,7 +24,8 @@ from model.predictor import THRESHOLDS, Predictor, Rollout, Transitions, transit
 
 log = logging.getLogger(__name__)
 TORCH_THREADS = 2
-ROLLOUT_CHUNK = 64  # graphs per forward pass during rollouts
+# Graphs per forward pass during rollouts: per graph and step, one thread, B = 4 costs 3.0 ms and B = 64 6.0 ms.
+ROLLOUT_CHUNK = 4
 
 
 @functools.cache
