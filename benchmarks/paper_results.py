@@ -17,6 +17,7 @@ days.png, pretrain.png, ablation.md. One JSON object (the main table at 30 min a
 from __future__ import annotations
 
 import argparse
+import fcntl
 import json
 import logging
 import os
@@ -56,27 +57,34 @@ TABLE_WINDOWS = (HEADLINE_WINDOW_MIN, 40)
 
 
 class Runs:
-    """runs.json: the dataset's fingerprint and run key -> record; written atomically after every run.
+    """runs.json: the dataset's fingerprint and run key -> record, rewritten atomically after every run.
 
-    Results of one dataset only: resuming onto another (regenerated with other code or seed) is refused.
+    Results of one dataset only: resuming onto another (regenerated with other code or seed) is refused. Several
+    processes may share the file (give each its own --households): a record is merged into what is on disk, under
+    a lock, never written over it.
     """
 
     def __init__(self, path: Path, dataset: str) -> None:
         self.path, self.dataset = path, dataset
-        saved = json.loads(path.read_text()) if path.is_file() else {"dataset": dataset, "runs": {}}
-        if saved.get("dataset") != dataset:
-            raise SystemExit(f"{path} holds runs on dataset {saved.get('dataset')}, not on this one ({dataset}); "
-                             "use another --out or move the file away")
-        self.records: dict[str, dict] = saved["runs"]
+        self.records: dict[str, dict] = self._read()
+
+    def _read(self) -> dict[str, dict]:
+        saved = json.loads(self.path.read_text()) if self.path.is_file() else {"dataset": self.dataset, "runs": {}}
+        if saved.get("dataset") != self.dataset:
+            raise SystemExit(f"{self.path} holds runs on dataset {saved.get('dataset')}, not on this one "
+                             f"({self.dataset}); use another --out or move the file away")
+        return saved["runs"]
 
     def done(self, key: str) -> bool:
         return key in self.records
 
     def add(self, key: str, record: dict) -> None:
-        self.records[key] = record
-        tmp = self.path.with_suffix(".json.tmp")
-        tmp.write_text(json.dumps({"dataset": self.dataset, "runs": self.records}, indent=1, sort_keys=True))
-        os.replace(tmp, self.path)
+        with open(self.path.with_suffix(".lock"), "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            self.records = {**self._read(), key: record}
+            tmp = self.path.with_suffix(f".{os.getpid()}.tmp")
+            tmp.write_text(json.dumps({"dataset": self.dataset, "runs": self.records}, indent=1, sort_keys=True))
+            os.replace(tmp, self.path)
 
 
 def dataset_fingerprint(dataset: Dataset) -> str:
