@@ -205,3 +205,18 @@ def test_wxyz_to_xyzw_round_trips() -> None:
         assert np.array_equal(xyzw_to_wxyz(wxyz_to_xyzw(single)), single)
     with pytest.raises(ValueError, match="shape"):
         wxyz_to_xyzw(np.zeros(3))
+
+
+def test_poses_sent_in_small_chunks_read_back_the_same(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Pose rows are buffered and sent by columns in chunks; the chunk size does not change what is recorded."""
+    record(tmp_path / "one.rrd", steps=300)
+    monkeypatch.setattr("homer_sim.recording.POSE_CHUNK_ROWS", 3)
+    record(tmp_path / "many.rrd", steps=300)
+    one, many = read_recording(tmp_path / "one.rrd"), read_recording(tmp_path / "many.rrd")
+    assert sorted(one) == sorted(many)
+    for body in _moving_bodies(mujoco.MjModel.from_xml_string(SCENE_XML)):
+        a = one[f"world/bodies/{body}"].sort_by(PHYSICS_TIMELINE)
+        b = many[f"world/bodies/{body}"].sort_by(PHYSICS_TIMELINE)
+        assert a.num_rows == b.num_rows > 0
+        for column in (PHYSICS_TIMELINE, ROUTINE_TIMELINE, "Transform3D:translation", "Transform3D:quaternion"):
+            assert a.column(column).to_pylist() == b.column(column).to_pylist(), (body, column)
