@@ -21,11 +21,13 @@ Timelines (both rerun "duration" timelines, so the viewer shows them as clocks):
 Wall-clock `log_time` is switched off: recordings depend on the simulated clocks only.
 
 Body poses are buffered and sent by columns (`send_columns`, one call per body and chunk of POSE_CHUNK_ROWS
-rows, and at `close`): one `log` call per body and pose costs milliseconds per physics frame.
+rows, and at `close`, or at interpreter exit if a run raised before `close`): one `log` call per body and pose
+costs milliseconds per physics frame.
 """
 
 from __future__ import annotations
 
+import atexit
 import logging
 from collections import defaultdict
 from pathlib import Path
@@ -99,6 +101,7 @@ class Recording:
         self._physics_s: float | None = None
         self._routine_minute: float | None = None
         self._stream.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        atexit.register(self.close)  # a run that raised before close still leaves its buffered poses in the file
 
     # --- lifecycle -----------------------------------------------------------------------------------
     def close(self) -> None:
@@ -109,6 +112,7 @@ class Recording:
         self._stream.flush()
         self._stream.disconnect()
         self._closed = True
+        atexit.unregister(self.close)
 
     def __enter__(self) -> Recording:
         return self

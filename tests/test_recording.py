@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import mujoco
@@ -220,3 +222,24 @@ def test_poses_sent_in_small_chunks_read_back_the_same(tmp_path: Path, monkeypat
         assert a.num_rows == b.num_rows > 0
         for column in (PHYSICS_TIMELINE, ROUTINE_TIMELINE, "Transform3D:translation", "Transform3D:quaternion"):
             assert a.column(column).to_pylist() == b.column(column).to_pylist(), (body, column)
+
+
+CRASHING_RUN = """
+import sys, mujoco
+from homer_sim.recording import Recording
+model = mujoco.MjModel.from_xml_string(sys.argv[2]); data = mujoco.MjData(model); mujoco.mj_forward(model, data)
+rec = Recording(sys.argv[1]); rec.set_routine_time(420.0); rec.log_geometry(model, data)
+for _ in range(200):
+    mujoco.mj_step(model, data); rec.log_body_poses(data)
+raise RuntimeError("the run fails before close")
+"""
+
+
+def test_a_run_that_raises_before_close_keeps_its_buffered_poses(tmp_path: Path) -> None:
+    path = tmp_path / "crashed.rrd"
+    run = subprocess.run([sys.executable, "-c", CRASHING_RUN, str(path), SCENE_XML], capture_output=True, text=True,
+                         cwd=Path(__file__).resolve().parents[1])
+    assert run.returncode != 0 and "the run fails before close" in run.stderr
+    record(tmp_path / "closed.rrd", steps=200)  # the same run, closed
+    rows = read_recording(path)["world/bodies/falling_box"].num_rows
+    assert rows == read_recording(tmp_path / "closed.rrd")["world/bodies/falling_box"].num_rows == 12
