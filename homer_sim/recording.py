@@ -19,10 +19,15 @@ Timelines (both rerun "duration" timelines, so the viewer shows them as clocks):
   (06:30:00 is routine minute 390). A float minute cannot go on a sequence timeline (integers only).
 
 Wall-clock `log_time` is switched off: recordings depend on the simulated clocks only.
+
+Body poses are buffered and sent by columns (`send_columns`, one call per body and chunk of POSE_CHUNK_ROWS
+rows, and at `close`, or at interpreter exit if a run raised before `close`): one `log` call per body and pose
+costs milliseconds per physics frame.
 """
 
 from __future__ import annotations
 
+import atexit
 import logging
 from collections import defaultdict
 from pathlib import Path
@@ -62,6 +67,7 @@ CATEGORY_COLORS = {  # RGBA, uint8
     "decor": (200, 140, 200, 255),
     "object": (240, 160, 40, 255),
 }
+POSE_CHUNK_ROWS = 20_000  # buffered pose rows (one body at one time) sent together
 _TIME_EPS_S = 1e-9  # absorbs float error when poses are logged exactly every POSE_PERIOD_S
 
 
@@ -88,18 +94,25 @@ class Recording:
         self._last_pos = np.zeros((0, 3))  # Shape (M, 3), last logged world positions in m
         self._last_quat = np.zeros((0, 4))  # Shape (M, 4), last logged world quaternions, wxyz
         self._last_pose_time_s: float | None = None
+        # Pose rows not yet sent: (physics s, routine minute or NaN, body ids (k,), positions (k, 3) m,
+        # quaternions (k, 4) xyzw), one entry per log_body_poses call that logged k bodies.
+        self._pose_rows: list[tuple[float, float, np.ndarray, np.ndarray, np.ndarray]] = []
+        self._pending_rows = 0
         self._physics_s: float | None = None
         self._routine_minute: float | None = None
         self._stream.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        atexit.register(self.close)  # a run that raised before close still leaves its buffered poses in the file
 
     # --- lifecycle -----------------------------------------------------------------------------------
     def close(self) -> None:
         """Flush everything and close the file (writes the rrd footer). Safe to call twice."""
         if self._closed:
             return
+        self._send_poses()
         self._stream.flush()
         self._stream.disconnect()
         self._closed = True
+        atexit.unregister(self.close)
 
     def __enter__(self) -> Recording:
         return self
@@ -202,16 +215,39 @@ class Recording:
         self._last_pose_time_s = time_s
         if not moved.any():
             return 0
-        self._stamp(time_s, self._routine_minute)
         moved_ids = self._moving_ids[moved]
-        for body_id, p, q_xyzw in zip(moved_ids, pos[moved], wxyz_to_xyzw(quat[moved]), strict=True):
-            self._stream.log(
-                self._body_paths[body_id],
-                rr.Transform3D(translation=p, quaternion=rr.Quaternion(xyzw=q_xyzw)),
-            )
+        minute = np.nan if self._routine_minute is None else self._routine_minute
+        self._pose_rows.append((time_s, minute, moved_ids, pos[moved], wxyz_to_xyzw(quat[moved])))
+        self._pending_rows += moved_ids.size
+        if self._pending_rows >= POSE_CHUNK_ROWS:
+            self._send_poses()
         self._last_pos[moved] = pos[moved]
         self._last_quat[moved] = quat[moved]
         return int(moved_ids.size)
+
+    def _send_poses(self) -> None:
+        """Send the buffered pose rows by columns: per body, its rows with and without a routine time."""
+        if not self._pose_rows:
+            return
+        counts = [ids.size for _, _, ids, _, _ in self._pose_rows]
+        time_s = np.repeat([row[0] for row in self._pose_rows], counts)
+        minute = np.repeat([row[1] for row in self._pose_rows], counts)
+        body = np.concatenate([row[2] for row in self._pose_rows])
+        pos = np.concatenate([row[3] for row in self._pose_rows])
+        quat = np.concatenate([row[4] for row in self._pose_rows])
+        self._pose_rows, self._pending_rows = [], 0
+        order = np.argsort(body, kind="stable")  # per body, rows stay in logging order
+        starts = np.flatnonzero(np.diff(body[order], prepend=-1))
+        for rows in np.split(order, starts[1:]):
+            timed = np.isfinite(minute[rows])
+            for part in (rows[~timed], rows[timed]):
+                if part.size == 0:
+                    continue
+                indexes = [rr.TimeColumn(PHYSICS_TIMELINE, duration=_nanoseconds(time_s[part]))]
+                if np.isfinite(minute[part[0]]):
+                    indexes.append(rr.TimeColumn(ROUTINE_TIMELINE, duration=_nanoseconds(minute[part] * 60.0)))
+                self._stream.send_columns(self._body_paths[body[part[0]]], indexes,
+                                          rr.Transform3D.columns(translation=pos[part], quaternion=quat[part]))
 
     # --- routine clock, scene graphs, events ---------------------------------------------------------
     def set_routine_time(self, routine_minute: float) -> None:
@@ -348,6 +384,11 @@ def _mesh(model: mujoco.MjModel, mesh_id: int, color: np.ndarray) -> rr.Mesh3D:
         triangle_indices=model.mesh_face[face_start : face_start + face_count],  # indices local to the mesh
         albedo_factor=color,
     )
+
+
+def _nanoseconds(seconds: np.ndarray) -> np.ndarray:
+    """Durations in s, Shape (N,), as timedelta64[ns], rounded as rerun rounds a time set with `set_time`."""
+    return np.round(seconds * 1e9).astype(np.int64).astype("timedelta64[ns]")
 
 
 def _check_minute(routine_minute: float) -> float:

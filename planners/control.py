@@ -7,6 +7,7 @@ writing the position targets into `data.ctrl` every control step while physics r
 
 from __future__ import annotations
 
+import bisect
 from collections.abc import Callable, Sequence
 
 import mujoco
@@ -27,7 +28,7 @@ MIN_JERK_PEAK = 1.875  # peak speed of a min-jerk profile over its mean speed
 
 def min_jerk(s: np.ndarray | float) -> np.ndarray | float:
     """Min-jerk time scaling: 0 -> 0, 1 -> 1 with zero velocity and acceleration at both ends."""
-    s = np.clip(s, 0.0, 1.0)
+    s = min(max(s, 0.0), 1.0) if isinstance(s, float) else np.clip(s, 0.0, 1.0)  # scalar: 10x faster, same bits
     return s**3 * (10.0 - 15.0 * s + 6.0 * s**2)
 
 
@@ -59,6 +60,7 @@ class Controller:
         self.n_body = len(BODY_JOINTS)
         self.target = self.q()
         self.grip_target = float(np.mean(self.target[self.n_body:]))
+        self._ctrl = np.zeros(self.n_body + 1)  # actuator targets (body joints, then the gripper) before offsets
 
     def q(self) -> np.ndarray:
         """Current robot configuration, shape (13,), in the robot-only model's order."""
@@ -68,9 +70,10 @@ class Controller:
         """Write targets: q_body shape (11,) or (13,) (base, torso, arm[, fingers]); grip: opening per finger, m."""
         self.target[: self.n_body] = q_body[: self.n_body]
         if grip is not None:
-            self.grip_target = float(np.clip(grip, 0.0, GRIPPER_MAX))
-        ctrl = np.append(self.target[: self.n_body], self.grip_target)
-        self.world.data.ctrl[self.actuator_ids] = ctrl - self.ctrl_offset
+            self.grip_target = min(max(float(grip), 0.0), GRIPPER_MAX)
+        self._ctrl[: self.n_body] = self.target[: self.n_body]
+        self._ctrl[self.n_body] = self.grip_target
+        self.world.data.ctrl[self.actuator_ids] = self._ctrl - self.ctrl_offset
 
     def duration(self, q_from: np.ndarray, q_to: np.ndarray, speed: float = SPEED_FRACTION) -> float:
         """Time in s for a min-jerk move whose peak joint speed stays at `speed` of the limits."""
@@ -94,16 +97,17 @@ class Controller:
         elif duration is None:
             duration = sum(self.duration(a, b, speed) for a, b in zip(path[:-1], path[1:], strict=True))
             duration = max(duration, MIN_DURATION)
-        cumulative = np.concatenate([[0.0], np.cumsum(seg)]) / (total if total > 0 else 1.0)
+        cumulative = (np.concatenate([[0.0], np.cumsum(seg)]) / (total if total > 0 else 1.0)).tolist()
+        steps = path[1:] - path[:-1]
         dt = CONTROL_STEPS * self.world.model.opt.timestep
         for k in range(1, int(np.ceil(duration / dt)) + 1):
             if total == 0:
                 s = 1.0
             else:
-                s = cruise(k * dt, duration, ramp) if cruising else float(min_jerk(k * dt / duration))
-            i = min(int(np.searchsorted(cumulative, s, side="right")) - 1, len(seg) - 1)
+                s = cruise(k * dt, duration, ramp) if cruising else min_jerk(k * dt / duration)
+            i = min(bisect.bisect_right(cumulative, s) - 1, len(seg) - 1)
             u = 0.0 if seg[i] == 0 else (s - cumulative[i]) / (cumulative[i + 1] - cumulative[i])
-            self.command(path[i] + np.clip(u, 0.0, 1.0) * (path[i + 1] - path[i]), grip)
+            self.command(path[i] + min(max(u, 0.0), 1.0) * steps[i], grip)
             self.world.step(CONTROL_STEPS)
             if abort is not None and abort():
                 return False

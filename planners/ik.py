@@ -10,8 +10,10 @@ between the arm and the base and torso.
 
 from __future__ import annotations
 
+from ctypes import c_int
 from dataclasses import dataclass
 
+import daqp
 import mink
 import mujoco
 import numpy as np
@@ -34,7 +36,8 @@ JOINT_SPEEDS = {"base_x": 1.0, "base_y": 1.0, "base_yaw": 1.7, "torso_lift": 0.1
                 "wrist_flex": 2.268, "wrist_roll": 2.268}
 POSITION_TOL = 0.005  # m
 ORIENTATION_TOL = np.deg2rad(2.0)  # rad
-SOLVER = "daqp"
+SOLVER = "daqp"  # DAQP, called directly (see IKSolver._velocity)
+NO_LOWER_BOUND = -1e30  # DAQP's "unbounded below", as qpsolvers passes it
 # Arm seeds (torso, then the 7 arm joints) tried after the start configuration: elbow up in front, and low.
 SEEDS = (np.array([0.2, 0.0, -0.8, 0.0, 1.6, 0.0, 0.8, 0.0]), np.array([0.0, 0.0, 0.5, 0.0, 1.2, 0.0, -0.2, 0.0]))
 
@@ -70,6 +73,19 @@ def robot_model() -> mujoco.MjModel:
     return spec.compile()
 
 
+class FixedLimit(mink.Limit):
+    """A mink limit whose constraint does not depend on the configuration (a velocity limit at a fixed dt in s):
+    computed once and reused at every step."""
+
+    def __init__(self, limit: mink.Limit, configuration: mink.Configuration, dt: float) -> None:
+        self.dt = dt
+        self.constraint = limit.compute_qp_inequalities(configuration, dt)
+
+    def compute_qp_inequalities(self, configuration: mink.Configuration, dt: float) -> mink.Constraint:
+        assert dt == self.dt, f"a FixedLimit made for dt {self.dt} s asked for dt {dt} s"
+        return self.constraint
+
+
 class IKSolver:
     """Differential IK on the robot-only model (its own MjData: IK never touches the live simulation).
 
@@ -87,11 +103,13 @@ class IKSolver:
         self.finger_qpos = np.array([self.model.joint(n).qposadr[0] for n in FINGER_JOINTS])
         self.limits = [
             mink.ConfigurationLimit(self.model),
-            mink.VelocityLimit(self.model, JOINT_SPEEDS),
+            FixedLimit(mink.VelocityLimit(self.model, JOINT_SPEEDS), self.configuration, dt),
             mink.CollisionAvoidanceLimit(self.model, [(list(ARM_GEOMS), list(BASE_GEOMS))],
                                          minimum_distance_from_collisions=0.02, collision_detection_distance=0.1),
         ]
         self._damping: dict[float, mink.DampingTask] = {}
+        self._blower = np.zeros(0)
+        self._sense = np.zeros(0, dtype=c_int)
 
     def _damping_task(self, base_cost: float) -> mink.DampingTask:
         if base_cost not in self._damping:
@@ -141,11 +159,11 @@ class IKSolver:
         errors: list[float] = []
         fingers = q_start[self.finger_qpos]
         for iteration in range(1, max_iters + 1):
-            velocity = mink.solve_ik(self.configuration, tasks, self.dt, SOLVER, damping=1e-3, limits=self.limits)
-            self.configuration.integrate_inplace(velocity, self.dt)
+            qpos = self.configuration.data.qpos  # integrated in place, fingers held, then one forward kinematics
+            mujoco.mj_integratePos(self.model, qpos, self._velocity(tasks), self.dt)
+            qpos[self.finger_qpos] = fingers
+            self.configuration.update()
             q = self.configuration.q
-            q[self.finger_qpos] = fingers
-            self.configuration.update(q)
             pos_err, rot_err = self._pose_error(position, quat)
             errors.append(pos_err)
             if pos_err < position_tol and rot_err < orientation_tol:
@@ -156,6 +174,21 @@ class IKSolver:
         reason = (f"unreachable: grip site stays {pos_err * 1000:.1f} mm and {np.rad2deg(rot_err):.1f} deg from "
                   f"the target {np.round(position, 3).tolist()} after {len(errors)} iterations")
         return IKResult(self.configuration.q.copy(), False, pos_err, rot_err, len(errors), np.array(errors), reason)
+
+    def _velocity(self, tasks: list[mink.Task]) -> np.ndarray:
+        """One differential-IK step at the current configuration: joint velocities, shape (nv,).
+
+        The QP of `mink.solve_ik` (same H, c, G, h from `mink.build_ik`), handed to DAQP as qpsolvers hands it, but
+        without qpsolvers' checks and dispatch and mink's limit check, which cost more than the solve itself.
+        """
+        problem = mink.build_ik(self.configuration, tasks, self.dt, damping=1e-3, limits=self.limits)
+        rows = problem.h.size
+        if self._blower.size != rows:
+            self._blower, self._sense = np.full(rows, NO_LOWER_BOUND), np.zeros(rows, dtype=c_int)
+        x, _, exitflag, _ = daqp.solve(problem.P, problem.q, problem.G, problem.h, self._blower, self._sense)
+        if exitflag <= 0:
+            raise mink.NoSolutionFound(SOLVER)
+        return x / self.dt
 
     def _pose_error(self, position: np.ndarray, quat: np.ndarray) -> tuple[float, float]:
         """(position error m, orientation error rad) of the grip site against the target."""

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import mujoco
@@ -205,3 +207,39 @@ def test_wxyz_to_xyzw_round_trips() -> None:
         assert np.array_equal(xyzw_to_wxyz(wxyz_to_xyzw(single)), single)
     with pytest.raises(ValueError, match="shape"):
         wxyz_to_xyzw(np.zeros(3))
+
+
+def test_poses_sent_in_small_chunks_read_back_the_same(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Pose rows are buffered and sent by columns in chunks; the chunk size does not change what is recorded."""
+    record(tmp_path / "one.rrd", steps=300)
+    monkeypatch.setattr("homer_sim.recording.POSE_CHUNK_ROWS", 3)
+    record(tmp_path / "many.rrd", steps=300)
+    one, many = read_recording(tmp_path / "one.rrd"), read_recording(tmp_path / "many.rrd")
+    assert sorted(one) == sorted(many)
+    for body in _moving_bodies(mujoco.MjModel.from_xml_string(SCENE_XML)):
+        a = one[f"world/bodies/{body}"].sort_by(PHYSICS_TIMELINE)
+        b = many[f"world/bodies/{body}"].sort_by(PHYSICS_TIMELINE)
+        assert a.num_rows == b.num_rows > 0
+        for column in (PHYSICS_TIMELINE, ROUTINE_TIMELINE, "Transform3D:translation", "Transform3D:quaternion"):
+            assert a.column(column).to_pylist() == b.column(column).to_pylist(), (body, column)
+
+
+CRASHING_RUN = """
+import sys, mujoco
+from homer_sim.recording import Recording
+model = mujoco.MjModel.from_xml_string(sys.argv[2]); data = mujoco.MjData(model); mujoco.mj_forward(model, data)
+rec = Recording(sys.argv[1]); rec.set_routine_time(420.0); rec.log_geometry(model, data)
+for _ in range(200):
+    mujoco.mj_step(model, data); rec.log_body_poses(data)
+raise RuntimeError("the run fails before close")
+"""
+
+
+def test_a_run_that_raises_before_close_keeps_its_buffered_poses(tmp_path: Path) -> None:
+    path = tmp_path / "crashed.rrd"
+    run = subprocess.run([sys.executable, "-c", CRASHING_RUN, str(path), SCENE_XML], capture_output=True, text=True,
+                         cwd=Path(__file__).resolve().parents[1])
+    assert run.returncode != 0 and "the run fails before close" in run.stderr
+    record(tmp_path / "closed.rrd", steps=200)  # the same run, closed
+    rows = read_recording(path)["world/bodies/falling_box"].num_rows
+    assert rows == read_recording(tmp_path / "closed.rrd")["world/bodies/falling_box"].num_rows == 12

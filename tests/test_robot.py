@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import math
 
+import mink
 import mujoco
 import numpy as np
 import pytest
 
 from homer_sim.world import World
 from planners.control import Controller, cruise
-from planners.ik import IKError, IKSolver
+from planners.ik import JOINT_SPEEDS, IKError, IKSolver
 from planners.robot import DEFAULT_POSE, PAD_GEOMS, ROBOT_XML, add_robot, robot_at
 
 DOWN = np.array([math.sqrt(0.5), 0.0, math.sqrt(0.5), 0.0])  # wxyz: grip x axis pointing down
@@ -130,3 +131,18 @@ def test_cruise_scaling_reaches_its_peak_speed_smoothly_and_ends_at_rest() -> No
     assert np.abs(np.diff(speed)).max() < 1e-3  # no jump in speed: the ramps are smooth
     middle = (t > ramp) & (t < duration - ramp)
     assert np.allclose(speed[middle[1:]], 1.0 / (duration - ramp))
+
+
+def test_ik_step_is_mink_solve_ik_bit_for_bit(solver: IKSolver) -> None:
+    """The direct DAQP call and the cached velocity limit give exactly mink.solve_ik's velocity."""
+    rng = np.random.default_rng(0)
+    home = solver.model.key("home").qpos.copy()
+    solver.frame_task.set_target(mink.SE3.from_rotation_and_translation(mink.SO3(DOWN), np.array([0.7, 0.1, 0.8])))
+    limits = [solver.limits[0], mink.VelocityLimit(solver.model, JOINT_SPEEDS), solver.limits[2]]
+    for _ in range(20):
+        q = np.clip(home + rng.uniform(-0.3, 0.3, size=home.shape), limits[0].lower + 1e-3, limits[0].upper - 1e-3)
+        solver.configuration.update(q)
+        solver.posture_task.set_target(home)
+        tasks = [solver.frame_task, solver.posture_task, solver._damping_task(10.0)]
+        expected = mink.solve_ik(solver.configuration, tasks, solver.dt, "daqp", damping=1e-3, limits=limits)
+        assert np.array_equal(solver._velocity(tasks), expected)

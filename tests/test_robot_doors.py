@@ -8,6 +8,8 @@ import pytest
 
 from homer_sim.world import World
 from planners.articulate import PartMotion, edge_grasp, handle_grasp
+from planners.control import Controller
+from planners.door_skills import ClearanceCheck, Held
 from planners.grasps import matrix_to_quat
 from planners.robot import add_robot
 from planners.skills import Robot
@@ -75,3 +77,33 @@ def test_robot_opens_and_closes_by_holding_the_part(name: str) -> None:
     drift, moved = _drift(world, before)
     assert drift < 0.02, f"{moved} moved {drift * 100:.1f} cm"
     assert world.warnings() == 0 and not world.has_nan()
+
+
+def test_clearance_check_on_the_filtered_model_agrees_with_a_full_collision() -> None:
+    """Random robot configurations, some with a door moved or the bowl in the hand: the check on the robot-only
+    collision filter answers as mj_collision over every geom of the apartment does."""
+    world = World(extras=[add_robot])
+    check = ClearanceCheck(world, Controller(world))
+    model, full = world.model, mujoco.MjData(world.model)
+    bowl = world.object_body_ids[world.object_index("bowl")]
+    bowl_geoms = frozenset(np.flatnonzero(model.geom_bodyid == bowl).tolist())
+    bowl_adr = int(world.object_qpos_adr[world.object_index("bowl")])
+    door = world.articulation("fridge/door")
+    rng = np.random.default_rng(3)
+    q0, answers = world.data.qpos[check.qpos_adr].copy(), []
+    for k in range(150):
+        q = q0.copy()
+        q[:3] = rng.uniform([0.5, 0.5, -3.0], [8.0, 6.0, 3.0])
+        q[3:11] = rng.uniform(-1.5, 1.5, size=8)
+        held = Held(bowl_geoms, bowl_adr, rng.uniform(-0.6, 0.6, size=3), np.eye(3))  # often in furniture or floor
+        art, value, hand = (door, 1.0, None) if k % 3 == 0 else (None, 0.0, held if k % 2 else None)
+        answer = check.clear(q, art, value, held=hand)
+        full.qpos[:] = check.scratch.qpos  # the configuration the check just tested, held object included
+        mujoco.mj_fwdPosition(model, full)
+        robot = check.robot | np.isin(np.arange(model.ngeom), list(hand.geoms) if hand else [])
+        checked = robot if hand else check.checked
+        touching = [c for c in full.contact[: full.ncon] if checked[c.geom1] != checked[c.geom2]
+                    and not (robot[c.geom1] and robot[c.geom2])]
+        assert answer == (not touching), f"configuration {k}: {q.round(3).tolist()}"
+        answers.append(answer)
+    assert 0.2 < np.mean(answers) < 0.8  # both answers were exercised
