@@ -316,18 +316,33 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     suite.add_argument("--trials", type=positive_int, default=None,
                        help=f"trials per class ({DEFAULT_TRIALS}; {QUICK_TRIALS} with --quick)")
     suite.add_argument("--seed", type=int, default=0, help="seed of the start-pose randomisation (0)")
+    suite.add_argument("--classes", nargs="+", metavar="CLASS", help="only these object classes (default: all)")
     suite.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
     suite.add_argument("--json", action="store_true", help="print one JSON object")
     suite.set_defaults(func=cmd_grasp_suite)
 
 
 def cmd_grasp_suite(args: argparse.Namespace) -> int:
-    result = run_suite(quick=args.quick, trials=args.trials, seed=args.seed, progress=not args.quiet)
+    result = run_suite(quick=args.quick, trials=args.trials, seed=args.seed, progress=not args.quiet,
+                       classes=chosen_classes(args.classes) if args.classes else None)
     if args.json:
         print(json.dumps(result))
     else:
         print(format_table(result))
     return 0 if result["meets_targets"] else 1
+
+
+def chosen_classes(names: list[str]) -> dict[str, str]:
+    """{class: the instance the suite picks} for the included classes `names`; a HomerError names an unknown or
+    excluded one and lists the valid names."""
+    from homer_sim.errors import HomerError
+
+    included, excluded = suite_classes()
+    for name in names:
+        if name not in included:
+            why = f"excluded ({excluded[name]})" if name in excluded else "unknown"
+            raise HomerError(f"grasp-suite class {name!r} is {why}; included: {', '.join(included)}")
+    return {name: included[name] for name in names}
 
 
 def format_table(result: dict) -> str:

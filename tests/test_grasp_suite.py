@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from homer_sim.catalog import CATALOG
+from homer_sim.errors import HomerError
 from homer_sim.recording import read_recording
 from planners.grasp_suite import (
     MAX_SLIP,
@@ -15,6 +16,7 @@ from planners.grasp_suite import (
     TARGET_CLASS,
     TARGET_OVERALL,
     TrialResult,
+    chosen_classes,
     quick_subset,
     run_suite,
     suite_classes,
@@ -32,6 +34,15 @@ def test_suite_lists_every_apartment_class_once_with_reasons_for_exclusions() ->
     quick = quick_subset(included)
     families = {CATALOG[c].family for c in included}
     assert sorted(CATALOG[c].family for c in quick) == sorted(families)  # one class per family
+
+
+def test_chosen_classes_name_their_instances_and_refuse_unknown_or_excluded_ones() -> None:
+    included, _ = suite_classes()
+    assert chosen_classes(["mug", "bowl"]) == {"mug": included["mug"], "bowl": included["bowl"]}
+    with pytest.raises(HomerError, match="'mugg' is unknown; included: bowl"):
+        chosen_classes(["mugg"])
+    with pytest.raises(HomerError, match="'plate' is excluded"):
+        chosen_classes(["plate"])
 
 
 def test_summary_counts_trials_and_rates() -> None:
