@@ -160,18 +160,20 @@ def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _robot_in_front(world: World, name: str, rng: np.random.Generator) -> Robot:
-    """A fresh `Robot` standing tucked at a free base pose in front of the furniture that holds `name`."""
+    """A fresh `Robot` standing tucked at a free base pose in front of the furniture that holds `name` (near
+    `name` where no pose in front is free)."""
     import mujoco
 
+    from planners.navigation import NavigationError
     from planners.skills import Robot
 
     robot = Robot(world, rng)
     decl = world.layout.objects[world.object_index(name)]
     q = robot.tuck.copy()
     xy = tuple(world.object_pose(name)[0][:2])
-    if decl.parent in robot.navigator.furniture:
+    try:  # in front of the furniture; where nothing is free there, anywhere near (the pick finds its own pose)
         q[:3] = robot.navigator.stand_pose(decl.parent, xy)
-    else:
+    except NavigationError:
         q[:3] = robot.navigator.stand_near(xy)
     world.data.qpos[robot.controller.qpos_adr] = q
     world.data.qvel[robot.controller.dof_adr] = 0.0
