@@ -70,6 +70,7 @@ class ClearanceCheck:
     """
 
     MARGIN = 0.005  # m
+    FINGER_GRAZE = 0.002  # m: an open finger may graze a neighbour's edge this deep (it slides off)
 
     def __init__(self, world, controller) -> None:
         self.world = world
@@ -80,7 +81,21 @@ class ClearanceCheck:
         fingers = {world.model.geom(PREFIX + n).id for n in ARM_GEOMS if n.startswith("finger")}
         self.robot = frozenset(robot.tolist())
         self.checked = self.robot - fingers
+        self.fingers = frozenset(fingers)
         self.grip = world.model.site(PREFIX + "grip").id
+
+    def fingers_clear(self, q: np.ndarray) -> bool:
+        """True if the fingers at configuration q (shape (13,), the finger openings included) touch nothing: an
+        open hand about to close round an object has both fingers beside it, on nothing else (a graze of at most
+        FINGER_GRAZE m aside)."""
+        d = self.scratch
+        d.qpos[:] = self.world.data.qpos
+        d.qpos[self.qpos_adr] = q
+        mujoco.mj_kinematics(self.model, d)
+        mujoco.mj_collision(self.model, d)
+        return not any((int(c.geom1) in self.fingers) != (int(c.geom2) in self.fingers)
+                       and not (int(c.geom1) in self.robot and int(c.geom2) in self.robot)
+                       and c.dist < -self.FINGER_GRAZE for c in d.contact[: d.ncon])
 
     def clear(self, q: np.ndarray, articulation=None, value: float = 0.0, held: Held | None = None) -> bool:
         """True if configuration q (shape (13,)) keeps MARGIN from the apartment, with `articulation` (if

@@ -17,7 +17,7 @@ from homer_sim.shapes import cavity
 MAX_WIDTH = 0.13  # m: widest grasp (stroke 0.14 m minus a margin)
 MIN_HEIGHT = 0.008  # m: thinner objects leave the pads nothing to hold above the support
 PAD_HALF = 0.025  # m: half length of a finger pad along the approach axis
-SUPPORT_CLEARANCE = 0.006  # m between the fingertips and the supporting surface
+SUPPORT_CLEARANCE = 0.003  # m between the fingertips and the supporting surface
 SIDE_HEIGHTS = (0.4, 0.75)  # fractions of an object's height at which side grasps hold it, in the order tried
 # (low holds steadier; high keeps the arm clear of a low shelf's edge and within reach near the floor)
 SIDE_MIN_Z = 0.035  # m above the support: the palm (0.03 m half height) clears the shelf
@@ -33,6 +33,8 @@ TOP_DEPTH = 0.02  # m: a grasp from above holds this far below the object's top
 SHELF_APPROACH = 0.05  # m: the approach onto a grasp under a shelf
 PALM_LOW_EDGE = (0.035, 0.03)  # m: the palm's front-low edge lies this far behind the grip site and off its z
 PALM_MARGIN = 0.01  # m between the palm's low edge and an object's front face
+TOP_MARGIN = 0.025  # m per finger between an open pad and the object before a grasp from above closes,
+TOP_NARROW_MARGIN = 0.005  # m: the same where a neighbour stands too close for the wide opening
 
 
 @dataclass(frozen=True)
@@ -105,7 +107,9 @@ def ungraspable_reason(cls: ObjectClass) -> str | None:
 
 def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_xy: np.ndarray) -> list[Grasp]:
     """Grasp candidates from above for an upright object at `position` (m, body centre) with body `quat`
-    (wxyz), best first; rim pinches for containers (on the rim nearest the robot at `robot_xy`)."""
+    (wxyz), best first: across its narrow side, then turned a quarter, the fingers open TOP_MARGIN past it, then
+    both again opened only TOP_NARROW_MARGIN past it; rim pinches for containers (on the rim nearest the robot
+    at `robot_xy`)."""
     sx, sy, sz = cls.size
     yaw = 2.0 * math.atan2(quat[3], quat[0])
     support = position[2] - sz / 2
@@ -117,12 +121,13 @@ def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_x
     grasps = []
     narrow = yaw + (math.pi / 2 if sy < sx else 0.0)  # fingers close along the narrow side
     width = min(sx, sy)
-    for finger_yaw, kind in ((narrow, "top"), (narrow + math.pi / 2, "top-turned")):
-        span = width if kind == "top" else max(sx, sy)
-        if span > MAX_WIDTH:
-            continue
-        centre = np.array([position[0], position[1], grip_z])
-        grasps.append(Grasp(centre, top_rotation(finger_yaw), min(0.07, span / 2 + 0.025), kind))
+    centre = np.array([position[0], position[1], grip_z])
+    for margin, suffix in ((TOP_MARGIN, ""), (TOP_NARROW_MARGIN, "-narrow")):
+        for finger_yaw, kind in ((narrow, "top"), (narrow + math.pi / 2, "top-turned")):
+            span = width if kind == "top" else max(sx, sy)
+            if span <= MAX_WIDTH:
+                grasps.append(Grasp(centre, top_rotation(finger_yaw), min(GRIPPER_OPEN, span / 2 + margin),
+                                    kind + suffix))
     return grasps
 
 
