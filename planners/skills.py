@@ -445,8 +445,10 @@ class Robot:
         else:
             legs = [LIFT * up]
         point = grasp.position
-        for leg in legs:
+        for leg in legs:  # the base follows a horizontal leg; a vertical one only where the arm alone falls short
             path = self._line(point, point + leg, quat, base_cost=PULL_BASE_COST if leg[2] == 0 else GRASP_BASE_COST)
+            if path is None and leg[2] != 0:
+                path = self._line(point, point + leg, quat, base_cost=PULL_BASE_COST)
             if path is None:
                 self._back_off(above, quat)
                 return SkillResult(False, "the lift leaves the arm's reach")
