@@ -159,7 +159,8 @@ def side_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwar
     if _round(cls):  # the pads reach past the centre, or closing squeezes the object out of the hand
         nominal = min(nominal, PAD_HALF - ROUND_PAST)
     along = max(nominal, front - PALM_SETBACK)  # grip site out from the centre, m
-    if along > nominal if _round(cls) else depth / 2 - (along - PAD_HALF) < SIDE_MIN_OVERLAP:
+    too_shallow = along > nominal if _round(cls) else depth / 2 - (along - PAD_HALF) < SIDE_MIN_OVERLAP
+    if too_shallow:
         return []
     heights = sorted({round(min(max(f * sz, SIDE_MIN_Z), sz - 0.015), 3) for f in SIDE_HEIGHTS},
                      key=lambda h: abs(h - SIDE_HEIGHTS[0] * sz))
