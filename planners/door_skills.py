@@ -75,6 +75,7 @@ class ClearanceCheck:
     """
 
     MARGIN = 0.005  # m
+    FINGER_GRAZE = 0.002  # m: an open finger may graze a neighbour's edge this deep (it slides off)
 
     def __init__(self, world, controller) -> None:
         self.world = world
@@ -85,12 +86,27 @@ class ClearanceCheck:
         fingers = [world.model.geom(PREFIX + n).id for n in ARM_GEOMS if n.startswith("finger")]
         self.robot = np.zeros(world.model.ngeom, dtype=bool)
         self.robot[robot] = True
-        self.checked = self.robot.copy()
-        self.checked[fingers] = False
+        self.fingers = np.zeros(world.model.ngeom, dtype=bool)
+        self.fingers[fingers] = True
+        self.checked = self.robot & ~self.fingers
         self.conaffinity = world.model.geom_conaffinity.copy()
         self.model.geom_conaffinity[~self.robot] = 0
         assert _same_filter(world.model, self.robot), "the robot-only collision filter would drop pairs"
         self.grip = world.model.site(PREFIX + "grip").id
+
+    def fingers_clear(self, q: np.ndarray) -> bool:
+        """True if the fingers at configuration q (shape (13,), the finger openings included) touch nothing: an
+        open hand about to close round an object has both fingers beside it, on nothing else (a graze of at most
+        FINGER_GRAZE m aside)."""
+        d = self.scratch
+        d.qpos[:] = self.world.data.qpos
+        d.qpos[self.qpos_adr] = q
+        mujoco.mj_kinematics(self.model, d)
+        mujoco.mj_collision(self.model, d)
+        g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
+        touching = ((self.fingers[g1] != self.fingers[g2]) & ~(self.robot[g1] & self.robot[g2])
+                    & (d.contact.dist[: d.ncon] < -self.FINGER_GRAZE))
+        return not touching.any()
 
     def clear(self, q: np.ndarray, articulation=None, value: float = 0.0, held: Held | None = None) -> bool:
         """True if configuration q (shape (13,)) keeps MARGIN from the apartment, with `articulation` (if

@@ -160,18 +160,20 @@ def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _robot_in_front(world: World, name: str, rng: np.random.Generator) -> Robot:
-    """A fresh `Robot` standing tucked at a free base pose in front of the furniture that holds `name`."""
+    """A fresh `Robot` standing tucked at a free base pose in front of the furniture that holds `name` (near
+    `name` where no pose in front is free)."""
     import mujoco
 
+    from planners.navigation import NavigationError
     from planners.skills import Robot
 
     robot = Robot(world, rng)
     decl = world.layout.objects[world.object_index(name)]
     q = robot.tuck.copy()
     xy = tuple(world.object_pose(name)[0][:2])
-    if decl.parent in robot.navigator.furniture:
+    try:  # in front of the furniture; where nothing is free there, anywhere near (the pick finds its own pose)
         q[:3] = robot.navigator.stand_pose(decl.parent, xy)
-    else:
+    except NavigationError:
         q[:3] = robot.navigator.stand_near(xy)
     world.data.qpos[robot.controller.qpos_adr] = q
     world.data.qvel[robot.controller.dof_adr] = 0.0
@@ -316,18 +318,33 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     suite.add_argument("--trials", type=positive_int, default=None,
                        help=f"trials per class ({DEFAULT_TRIALS}; {QUICK_TRIALS} with --quick)")
     suite.add_argument("--seed", type=int, default=0, help="seed of the start-pose randomisation (0)")
+    suite.add_argument("--classes", nargs="+", metavar="CLASS", help="only these object classes (default: all)")
     suite.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
     suite.add_argument("--json", action="store_true", help="print one JSON object")
     suite.set_defaults(func=cmd_grasp_suite)
 
 
 def cmd_grasp_suite(args: argparse.Namespace) -> int:
-    result = run_suite(quick=args.quick, trials=args.trials, seed=args.seed, progress=not args.quiet)
+    result = run_suite(quick=args.quick, trials=args.trials, seed=args.seed, progress=not args.quiet,
+                       classes=chosen_classes(args.classes) if args.classes else None)
     if args.json:
         print(json.dumps(result))
     else:
         print(format_table(result))
     return 0 if result["meets_targets"] else 1
+
+
+def chosen_classes(names: list[str]) -> dict[str, str]:
+    """{class: the instance the suite picks} for the included classes `names`; a HomerError names an unknown or
+    excluded one and lists the valid names."""
+    from homer_sim.errors import HomerError
+
+    included, excluded = suite_classes()
+    for name in names:
+        if name not in included:
+            why = f"excluded ({excluded[name]})" if name in excluded else "unknown"
+            raise HomerError(f"grasp-suite class {name!r} is {why}; included: {', '.join(included)}")
+    return {name: included[name] for name in names}
 
 
 def format_table(result: dict) -> str:

@@ -7,7 +7,7 @@ A grasp is the grip site's world pose at the moment the fingers close: position 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -17,7 +17,7 @@ from homer_sim.shapes import cavity
 MAX_WIDTH = 0.13  # m: widest grasp (stroke 0.14 m minus a margin)
 MIN_HEIGHT = 0.008  # m: thinner objects leave the pads nothing to hold above the support
 PAD_HALF = 0.025  # m: half length of a finger pad along the approach axis
-SUPPORT_CLEARANCE = 0.006  # m between the fingertips and the supporting surface
+SUPPORT_CLEARANCE = 0.003  # m between the fingertips and the supporting surface
 SIDE_HEIGHTS = (0.4, 0.75)  # fractions of an object's height at which side grasps hold it, in the order tried
 # (low holds steadier; high keeps the arm clear of a low shelf's edge and within reach near the floor)
 SIDE_MIN_Z = 0.035  # m above the support: the palm (0.03 m half height) clears the shelf
@@ -25,6 +25,10 @@ SIDE_MARGIN = 0.01  # m per finger between an open pad and the object before a s
 SIDE_DEPTH = 0.022  # m from an object's near face to the grip site: the palm (0.035 m behind it) stays clear
 PALM_SETBACK = 0.027  # m: the palm's front face lies 0.035 m behind the grip site; 8 mm to spare
 SIDE_MIN_OVERLAP = 0.015  # m of the object's depth between the pads
+ROUND_PAST = 0.01  # m: the pads reach this far past a round object's centre
+FACE_MIN_TURN = math.radians(3.0)  # rad an object's face must turn off the furniture's front for "-faced" grasps
+ROUND_TURNS = tuple(math.radians(a) for a in (35.0, -35.0))  # rad off the furniture's front normal: slanted side
+# grasps of round objects
 GRIPPER_OPEN = 0.07  # m per finger, the gripper's stroke
 SHELF_PITCHES = (0.0, math.radians(30), math.radians(45), math.radians(60), math.radians(90))  # rad below the
 # horizontal of an in-furniture grasp's approach: 0 is the side grasp, 90 degrees straight down
@@ -33,6 +37,9 @@ TOP_DEPTH = 0.02  # m: a grasp from above holds this far below the object's top
 SHELF_APPROACH = 0.05  # m: the approach onto a grasp under a shelf
 PALM_LOW_EDGE = (0.035, 0.03)  # m: the palm's front-low edge lies this far behind the grip site and off its z
 PALM_MARGIN = 0.01  # m between the palm's low edge and an object's front face
+ROUND_FAMILIES = ("cylinder", "sphere", "cup", "bowl")  # families whose upright footprint is a disk
+TOP_MARGIN = 0.025  # m per finger between an open pad and the object before a grasp from above closes,
+TOP_NARROW_MARGIN = 0.005  # m: the same where a neighbour stands too close for the wide opening
 
 
 @dataclass(frozen=True)
@@ -105,7 +112,9 @@ def ungraspable_reason(cls: ObjectClass) -> str | None:
 
 def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_xy: np.ndarray) -> list[Grasp]:
     """Grasp candidates from above for an upright object at `position` (m, body centre) with body `quat`
-    (wxyz), best first; rim pinches for containers (on the rim nearest the robot at `robot_xy`)."""
+    (wxyz), best first: across its narrow side, then turned a quarter, the fingers open TOP_MARGIN past it, then
+    both again opened only TOP_NARROW_MARGIN past it; rim pinches for containers (on the rim nearest the robot
+    at `robot_xy`)."""
     sx, sy, sz = cls.size
     yaw = 2.0 * math.atan2(quat[3], quat[0])
     support = position[2] - sz / 2
@@ -117,12 +126,13 @@ def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_x
     grasps = []
     narrow = yaw + (math.pi / 2 if sy < sx else 0.0)  # fingers close along the narrow side
     width = min(sx, sy)
-    for finger_yaw, kind in ((narrow, "top"), (narrow + math.pi / 2, "top-turned")):
-        span = width if kind == "top" else max(sx, sy)
-        if span > MAX_WIDTH:
-            continue
-        centre = np.array([position[0], position[1], grip_z])
-        grasps.append(Grasp(centre, top_rotation(finger_yaw), min(0.07, span / 2 + 0.025), kind))
+    centre = np.array([position[0], position[1], grip_z])
+    for margin, suffix in ((TOP_MARGIN, ""), (TOP_NARROW_MARGIN, "-narrow")):
+        for finger_yaw, kind in ((narrow, "top"), (narrow + math.pi / 2, "top-turned")):
+            span = width if kind == "top" else max(sx, sy)
+            if span <= MAX_WIDTH:
+                grasps.append(Grasp(centre, top_rotation(finger_yaw), min(GRIPPER_OPEN, span / 2 + margin),
+                                    kind + suffix))
     return grasps
 
 
@@ -145,8 +155,12 @@ def side_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwar
         return []
     support = position[2] - sz / 2
     rotation = np.column_stack([-out, across, np.cross(-out, across)])
-    along = max(depth / 2 - SIDE_DEPTH, front - PALM_SETBACK)  # grip site out from the centre, m
-    if depth / 2 - (along - PAD_HALF) < SIDE_MIN_OVERLAP:
+    nominal = depth / 2 - SIDE_DEPTH
+    if _round(cls):  # the pads reach past the centre, or closing squeezes the object out of the hand
+        nominal = min(nominal, PAD_HALF - ROUND_PAST)
+    along = max(nominal, front - PALM_SETBACK)  # grip site out from the centre, m
+    too_shallow = along > nominal if _round(cls) else depth / 2 - (along - PAD_HALF) < SIDE_MIN_OVERLAP
+    if too_shallow:
         return []
     heights = sorted({round(min(max(f * sz, SIDE_MIN_Z), sz - 0.015), 3) for f in SIDE_HEIGHTS},
                      key=lambda h: abs(h - SIDE_HEIGHTS[0] * sz))
@@ -161,23 +175,38 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
     grasp (see `side_grasps`; with the palm inside the furniture where the front part alone is too shallow to
     hold), then approaches pitched SHELF_PITCHES down into the compartment with the fingers
     closing horizontally across the object near its top (short enough for the wrist to pass under the shelf
-    above; whether it does is for a collision check of the arm), then rim pinches of containers (only those
-    for wide ones).
+    above; whether it does is for a collision check of the arm); then the same square to the object's own face
+    nearest the front where it stands turned ("-faced"), slanted side grasps of round objects (see
+    `_turned_sides`), and rim pinches of containers (only those for wide ones).
 
     outward: horizontal unit vector (shape (2,) or (3,)) out of the furniture's front; front: m from the
     object's centre to the front plane along it. Best first; empty when no grasp fits the shape.
     """
     sx, sy, sz = cls.size
-    out, across, yaw = _shelf_frame(outward, quat)
-    support, top = position[2] - sz / 2, position[2] + sz / 2
-    grasps = side_grasps(cls, position, quat, outward, front) or side_grasps(cls, position, quat, outward, -np.inf)
+    out, _, yaw = _shelf_frame(outward, quat)
     hollow = cavity(cls)
+    rims = [] if hollow is None else _tilted_rims(hollow, position, yaw, position[2] - sz / 2, out)
+    grasps = side_grasps(cls, position, quat, outward, front) or side_grasps(cls, position, quat, outward, -np.inf)
     if hollow is not None and min(sx, sy) > MAX_WIDTH - 0.02:
-        return grasps + _tilted_rims(hollow, position, yaw, support, out)
-    rims = _tilted_rims(hollow, position, yaw, support, out) if hollow is not None else []
+        return grasps + rims
+    grasps += _pitched_grasps(cls, position, quat, out)
+    face = _face_normal(out, yaw, cls)
+    turn_cos = float(face @ out)
+    if turn_cos < math.cos(FACE_MIN_TURN):
+        faced = side_grasps(cls, position, quat, face, front / turn_cos) or side_grasps(cls, position, quat, face,
+                                                                                          -np.inf)
+        grasps += [replace(g, kind=f"{g.kind}-faced") for g in faced + _pitched_grasps(cls, position, quat, face)]
+    return grasps + _turned_sides(cls, position, quat, out) + rims
+
+
+def _pitched_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray) -> list[Grasp]:
+    """Grasps approached SHELF_PITCHES down against `outward` (shape (3,)), the fingers closing horizontally
+    across the object near its top (from straight above also along the approach); see `shelf_grasps`."""
+    out, across, yaw = _shelf_frame(outward, quat)
+    support, top = position[2] - cls.size[2] / 2, position[2] + cls.size[2] / 2
+    grasps = []
     for pitch in SHELF_PITCHES[1:]:
         x = math.cos(pitch) * -out + np.array([0.0, 0.0, -math.sin(pitch)])
-        # fingers across the object seen from the front; from straight above also along the approach
         for y in (across, np.cross(across, x))[: 2 if pitch == SHELF_PITCHES[-1] else 1]:
             width = _extent(y, cls, yaw)
             if width > MAX_WIDTH:
@@ -192,7 +221,21 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
             centre = np.array([position[0], position[1], z]) + out * shift
             grasps.append(Grasp(centre, np.column_stack([x, y, np.cross(x, y)]), min(GRIPPER_OPEN, width / 2 + 0.025),
                                 f"shelf-{math.degrees(pitch):.0f}", SHELF_APPROACH))
-    return grasps + rims
+    return grasps
+
+
+def _turned_sides(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray) -> list[Grasp]:
+    """Side grasps of a round object approached ROUND_TURNS off `outward`: next to a furniture's side wall
+    the 18 cm palm clears it only coming in at a slant (the fingers still close across the diameter)."""
+    if not _round(cls):
+        return []
+    grasps = []
+    for turn in ROUND_TURNS:
+        c, s = math.cos(turn), math.sin(turn)
+        turned = np.array([c * outward[0] - s * outward[1], s * outward[0] + c * outward[1]])
+        grasps += [replace(g, kind=f"{g.kind}{math.degrees(turn):+.0f}")
+                   for g in side_grasps(cls, position, quat, turned, -np.inf)]
+    return grasps
 
 
 def _shelf_frame(outward: np.ndarray, quat: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
@@ -202,8 +245,24 @@ def _shelf_frame(outward: np.ndarray, quat: np.ndarray) -> tuple[np.ndarray, np.
     return out, np.array([-out[1], out[0], 0.0]), 2.0 * math.atan2(quat[3], quat[0])
 
 
+def _face_normal(out: np.ndarray, yaw: float, cls: ObjectClass) -> np.ndarray:
+    """The outward normal (shape (3,)) of the object's side face nearest horizontal unit `out` (shape (3,)),
+    the object turned by `yaw` rad; a round object's is `out` itself."""
+    if _round(cls):
+        return out
+    face = max((yaw + k * math.pi / 2 for k in range(4)), key=lambda a: math.cos(a) * out[0] + math.sin(a) * out[1])
+    return np.array([math.cos(face), math.sin(face), 0.0])
+
+
+def _round(cls: ObjectClass) -> bool:
+    """Whether the class stands on a round footprint (its horizontal extent is its diameter at any yaw)."""
+    return cls.family in ROUND_FAMILIES and cls.size[0] == cls.size[1]
+
+
 def _extent(direction: np.ndarray, cls: ObjectClass, yaw: float) -> float:
     """Extent (m) along horizontal unit `direction` (shape (3,)) of the footprint of `cls` turned by `yaw`."""
+    if _round(cls):
+        return cls.size[0]
     return abs(direction[0] * math.cos(yaw) + direction[1] * math.sin(yaw)) * cls.size[0] + abs(
         -direction[0] * math.sin(yaw) + direction[1] * math.cos(yaw)) * cls.size[1]
 

@@ -19,8 +19,8 @@ from homer_sim.validate import ROBOT_RADIUS, access_sides
 from planners.control import SPEED_FRACTION, Controller
 
 STAND_DISTANCES = np.arange(0.34, 0.81, 0.02)  # m from the furniture's front face to the base centre
-STAND_OFFSETS = np.array([0.0, 0.05, -0.05, 0.1, -0.1, 0.15, -0.15, 0.2, -0.2, 0.3, -0.3, 0.4, -0.4])  # m along
-# the face
+STAND_OFFSETS = np.array([0.0, 0.05, -0.05, 0.1, -0.1, 0.15, -0.15, 0.2, -0.2, 0.3, -0.3, 0.4, -0.4, 0.5,
+                          -0.5])  # m along the face
 NEAR_DISTANCES = (0.5, 0.6, 0.7)  # m from an object on the floor to the base centre
 NEAR_TURNS = np.radians(np.arange(0, 360, 30))  # rad around an object on the floor, from the robot's side
 WAYPOINT_STRIDE = 4  # keep every 4th grid cell of a path

@@ -45,7 +45,7 @@ TURN_STEP = 0.15  # rad the hand turns at most between IK waypoints of a move be
 RAISED_SHOULDER = -1.0  # rad: upper arm raised above the tuck
 SIDE_LIFT = 0.03  # m: a side grasp first lifts the object this much off its shelf,
 SIDE_PULL = 0.35  # m: then draws it this far out of the furniture,
-SIDE_RAISE = 0.09  # m: then raises it this much more
+SIDE_RAISE = 0.13  # m: then raises it this much more
 ENTRY_OUT = 0.12  # m: a grasp inside furniture is entered from this far in front of its front plane
 ENTRY_STEP = 0.05  # m between checked configurations on the way in
 PASS_OVER = 0.03  # m between a carried object and a surface it is carried over before it is put down
@@ -187,17 +187,20 @@ class Robot:
                                 reach, **(FREE_MOTION if self.held is None else CARRY_MOTION))
         return short
 
-    def _go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float) -> list[np.ndarray] | None:
+    def _go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float, here_first: bool = False
+                     ) -> list[np.ndarray] | None:
         """Drive (arm tucked) to a free base pose from which the way into `grasp` is reachable with the arm
         clear of the apartment: the grip `entry` m out along `pull` (a horizontal unit vector out of the
         furniture, shape (3,)) from the approach point, in along a straight line, the approach, and SIDE_LIFT m
         above the grasp. Returns the configurations (each shape (13,)) from the entry to the approach point, or
-        None (the robot stays) if no base pose works."""
+        None (the robot stays) if no base pose works. With `here_first`, where the robot stands is tried first."""
         quat = grasp.quat()
         above = grasp.position - grasp.approach * grasp.rotation[:, 0]
         obstacles = self.navigator.open_part_rects()
-        for base in base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2]):
-            if not self.navigator.plan.disk_is_free(base[0], base[1], ROBOT_RADIUS + CLEARANCE, obstacles):
+        here = [tuple(self.controller.target[:3])] if here_first else []
+        for base in [*here, *base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2])]:
+            if base not in here and not self.navigator.plan.disk_is_free(base[0], base[1], ROBOT_RADIUS + CLEARANCE,
+                                                                         obstacles):
                 continue
             q = self.tuck.copy()
             q[:3] = base
@@ -331,6 +334,7 @@ class Robot:
                     if outcome.success:
                         return outcome
                     side_failures.append(outcome.reason.removeprefix(f"{name}: "))
+        stand_failure = ""
         try:
             if furniture is None:  # on the floor of a room
                 goal = self.navigator.stand_near(tuple(position[:2]))
@@ -339,16 +343,35 @@ class Robot:
             else:
                 self.go_to(node, position[:2])
         except NavigationError as error:
-            return SkillResult(False, f"{name}: {error}")
-        grasps = top_grasps(cls, position, quat, self.controller.q()[:2])
+            stand_failure = str(error)  # a base pose checked for the grasp itself may still reach it
         failures = side_failures
-        for grasp in grasps:
-            outcome = self._try_grasp(name, grasp)
+        grasps = top_grasps(cls, position, quat, self.controller.q()[:2])
+        for grasp in sorted(grasps, key=lambda g: not self._fingers_fit(g)):  # stable: the blocked ones last
+            outcome = self._grasp_from_above(name, grasp, stand_failure)
             if outcome.success:
                 self.held = name
                 return outcome
             failures.append(f"{grasp.kind}: {outcome.reason}")
         return SkillResult(False, f"{name}: every grasp failed ({'; '.join(failures)})")
+
+    def _grasp_from_above(self, name: str, grasp: Grasp, stand_failure: str) -> SkillResult:
+        """Try `grasp` from a base pose checked for it (the arm clear of the apartment on the way in), else from
+        where the robot stands, unless it found no place to stand (`stand_failure`, the reason)."""
+        try:
+            path_in = self._go_to_grasp(grasp, np.zeros(3), 0.0, here_first=not stand_failure)
+        except NavigationError as error:
+            return SkillResult(False, str(error))
+        if path_in is None and stand_failure:
+            return SkillResult(False, f"{stand_failure}, and no checked base pose reaches the grasp")
+        return self._try_grasp(name, grasp, path_in=path_in)
+
+    def _fingers_fit(self, grasp: Grasp) -> bool:
+        """Whether the fingers, open `grasp.pre_opening`, fit round the object at `grasp` without landing on
+        anything else (a neighbour, a drawer's wall); True where the arm cannot tell from where it stands."""
+        at_grasp = self._ik(grasp.position, grasp.quat())
+        q = at_grasp.q.copy()
+        q[self.controller.n_body:] = grasp.pre_opening
+        return not at_grasp.converged or self.clearance.fingers_clear(q)
 
     def _pick_from_shelf(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
                          out: np.ndarray | None = None) -> SkillResult:
@@ -422,8 +445,10 @@ class Robot:
         else:
             legs = [LIFT * up]
         point = grasp.position
-        for leg in legs:
+        for leg in legs:  # the base follows a horizontal leg; a vertical one only where the arm alone falls short
             path = self._line(point, point + leg, quat, base_cost=PULL_BASE_COST if leg[2] == 0 else GRASP_BASE_COST)
+            if path is None and leg[2] != 0:
+                path = self._line(point, point + leg, quat, base_cost=PULL_BASE_COST)
             if path is None:
                 self._back_off(above, quat)
                 return SkillResult(False, "the lift leaves the arm's reach")

@@ -1,0 +1,71 @@
+"""Grasp poses from an object's shape (no physics): widths, depths and directions checked in numbers."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from homer_sim.catalog import CATALOG
+from planners.grasps import (
+    GRIPPER_OPEN,
+    MAX_WIDTH,
+    PAD_HALF,
+    ROUND_PAST,
+    SUPPORT_CLEARANCE,
+    TOP_MARGIN,
+    TOP_NARROW_MARGIN,
+    shelf_grasps,
+    side_grasps,
+    top_grasps,
+)
+
+OUT = np.array([1.0, 0.0])  # out of the furniture's front, towards the robot
+
+
+def _yawed(angle_deg: float) -> np.ndarray:
+    half = math.radians(angle_deg) / 2
+    return np.array([math.cos(half), 0.0, 0.0, math.sin(half)])
+
+
+def test_a_round_object_turned_on_a_shelf_is_as_wide_as_its_diameter() -> None:
+    paper = CATALOG["toilet_paper"]  # 11 cm across: its turned bounding box (14 cm at 20 degrees) would not fit
+    position = np.array([0.0, 0.0, paper.size[2] / 2])
+    grasps = side_grasps(paper, position, _yawed(20.0), OUT, front=-np.inf)
+    assert grasps and paper.size[0] <= MAX_WIDTH
+    assert grasps[0].pre_opening == pytest.approx(min(GRIPPER_OPEN, paper.size[0] / 2 + 0.01))
+
+
+def test_side_grasps_of_a_round_object_reach_past_its_centre() -> None:
+    wipes = CATALOG["disinfectant_wipes"]
+    position = np.array([0.0, 0.0, wipes.size[2] / 2])
+    for grasp in side_grasps(wipes, position, _yawed(0.0), OUT, front=-np.inf):
+        along = float(grasp.position[0])  # grip site out of the object's centre, towards the robot
+        assert along - PAD_HALF <= -ROUND_PAST + 1e-9  # the pads' far end lies past the centre
+    # held at its front edge (the palm kept in front of a front plane 6 cm out): no grasp rather than a squeeze
+    assert side_grasps(wipes, position, _yawed(0.0), OUT, front=0.06) == []
+
+
+def test_a_turned_box_gets_grasps_square_to_its_own_faces() -> None:
+    veg = CATALOG["food_vegetable"]  # 15 x 10 cm: too wide across the front when turned, 10 cm square to a face
+    position = np.array([0.0, 0.0, veg.size[2] / 2])
+    grasps = shelf_grasps(veg, position, _yawed(20.0), OUT, front=0.2)
+    faced = [g for g in grasps if g.kind.endswith("-faced")]
+    assert faced and not [g for g in grasps if not g.kind.endswith("-faced")]
+    for grasp in faced:  # the fingers close along one of the object's own axes
+        finger = grasp.rotation[:, 1]
+        assert min(abs(math.degrees(math.atan2(finger[1], finger[0])) - a) for a in (20, 110, -70, -160)) < 1e-6
+    assert shelf_grasps(veg, position, _yawed(0.0), OUT, front=0.2) != []  # square already: no "-faced" copies
+    assert not [g for g in shelf_grasps(veg, position, _yawed(0.0), OUT, 0.2) if g.kind.endswith("-faced")]
+
+
+def test_grasps_from_above_open_wide_then_narrow_and_stop_above_the_support() -> None:
+    paste = CATALOG["tooth_paste"]  # 19 x 4.5 x 3.5 cm: only across its narrow side
+    position = np.array([0.0, 0.0, paste.size[2] / 2])
+    grasps = top_grasps(paste, position, _yawed(0.0), np.array([-1.0, 0.0]))
+    assert [g.kind for g in grasps] == ["top", "top-narrow"]
+    assert [g.pre_opening for g in grasps] == pytest.approx([paste.size[1] / 2 + TOP_MARGIN,
+                                                             paste.size[1] / 2 + TOP_NARROW_MARGIN])
+    tip_z = grasps[0].position[2] - PAD_HALF  # the hand points down: the fingertips are below the grip site
+    assert tip_z == pytest.approx(SUPPORT_CLEARANCE)
