@@ -12,6 +12,7 @@ Files in OUT: main_table.md / main_table.json (30 and 40 min: mean and spread ov
 days.png, pretrain.png, ablation.md. One JSON object (the main table at 30 min and the file list) on stdout.
 
     .venv/bin/python benchmarks/paper_results.py --data DIR --out DIR [--experiments main,ablation]
+    .venv/bin/python benchmarks/paper_results.py --data DIR --out DIR --report   # files from the runs so far
 """
 
 from __future__ import annotations
@@ -239,6 +240,9 @@ def main() -> None:
                         help=f"from {', '.join(EXPERIMENTS)}, run in the order given")
     parser.add_argument("--households", default=None, help="comma-separated subset (default all)")
     parser.add_argument("--methods", default=",".join(DEFAULT_METHODS), help="methods of the main experiment")
+    parser.add_argument("--report", action="store_true",
+                        help="only write the files from the runs already in OUT/runs.json (another process may still "
+                             "be adding runs)")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(asctime)s %(name)s: %(message)s")
     experiments = [e for e in args.experiments.split(",") if e]
@@ -249,7 +253,9 @@ def main() -> None:
     households = args.households.split(",") if args.households else list(dataset.meta.households)
     args.out.mkdir(parents=True, exist_ok=True)
     runs = Runs(args.out / "runs.json", dataset_fingerprint(dataset))
-    execute(dataset, runs, plan(dataset, experiments, households, args.methods.split(",")), args.out / "checkpoints")
+    if not args.report:
+        execute(dataset, runs, plan(dataset, experiments, households, args.methods.split(",")),
+                args.out / "checkpoints")
     json.dump(write_outputs(runs.records, args.out), sys.stdout, indent=1)
     sys.stdout.write("\n")
 
