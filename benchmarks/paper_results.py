@@ -167,6 +167,14 @@ def table(records: dict, prefix: str, window: int) -> dict:
     return {"window_min": window, "households": houses, "methods": {m: summarise(v) for m, v in per_method.items()}}
 
 
+def _complete(records: dict, prefix: str, methods: tuple[str, ...]) -> dict:
+    """The runs under `prefix` of `methods`, for only the households that have a run of every one of them."""
+    runs = {k: r for k, r in records.items() if k.startswith(prefix) and k.split("/")[2] in methods}
+    done = {(k.split("/")[1], k.split("/")[2]) for k in runs}
+    houses = {house for house, _ in done if all((house, m) in done for m in methods)}
+    return {k: r for k, r in runs.items() if k.split("/")[1] in houses}
+
+
 def per_query(records: dict, prefix: str) -> dict[str, dict[int, dict]]:
     """Objects per query in each outcome, averaged over households, per method and window."""
     out: dict[str, dict[int, dict]] = {}
@@ -203,8 +211,9 @@ def days_summary(records: dict, experiment: str, methods: tuple[str, ...], label
 def write_outputs(records: dict, out: Path) -> dict:
     """Every file that the finished runs allow; returns the 30-minute main table and the files written."""
     files, main = [], {}
+    methods_runs = {k: r for k, r in records.items() if k.split("/")[2] not in ABLATIONS[1:]}
     for window in TABLE_WINDOWS:
-        result = table(records, "main/", window)
+        result = table(methods_runs, "main/", window)
         if result["methods"]:
             main.setdefault("tables", {})[str(window)] = result
     if main:
@@ -213,11 +222,12 @@ def write_outputs(records: dict, out: Path) -> dict:
         files += ["main_table.json", "main_table.md"]
         curves = per_query(records, "main/")
         files.append(window_bars({m: curves[m] for m in curves if m not in ABLATIONS[1:]}, out / "windows.png").name)
-        ablation = {m: v for m, v in main["tables"][str(HEADLINE_WINDOW_MIN)]["methods"].items() if m in ABLATIONS}
-        if len(ablation) > 1:
+        ablation = table(_complete(records, "main/", ABLATIONS), "main/", HEADLINE_WINDOW_MIN)
+        if ablation["methods"]:
             rows = [f"| {m} | {v['used']['correct']:.2f} | {v['used']['wrong']:.2f} | {v['unused']['wrong']:.2f} |"
-                    for m, v in ablation.items()]
-            (out / "ablation.md").write_text("| method | % used correct | % used wrong | % unused wrong |\n"
+                    for m, v in ablation["methods"].items()]
+            (out / "ablation.md").write_text(f"households: {', '.join(ablation['households'])}\n\n"
+                                             "| method | % used correct | % used wrong | % unused wrong |\n"
                                              "|---|---|---|---|\n" + "\n".join(rows) + "\n")
             files.append("ablation.md")
     if any(k.startswith("days/") for k in records):
