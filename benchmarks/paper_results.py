@@ -233,10 +233,12 @@ def write_outputs(records: dict, out: Path) -> dict:
     if any(k.startswith("days/") for k in records):
         files.append(days_curve(days_summary(records, "days", DAYS_METHODS), out / "days.png",
                                 "30-minute window, by training days").name)
-    if any(k.startswith("pretrain/") for k in records):
-        curves = {**days_summary(records, "days", ("gnn",)), **days_summary(records, "pretrain", ("gnn",),
-                                                                              " (pre-trained)")}
-        files.append(days_curve(curves, out / "pretrain.png", "graph network: from scratch vs pre-trained").name)
+    houses = sorted({k.split("/")[1] for k in records if k.startswith("pretrain/")})
+    if houses:  # from scratch on the same households as the pre-trained runs so far
+        same = {k: r for k, r in records.items() if k.split("/")[1] in houses}
+        curves = {**days_summary(same, "days", ("gnn",)), **days_summary(same, "pretrain", ("gnn",), " (pre-trained)")}
+        files.append(days_curve(curves, out / "pretrain.png", "graph network: from scratch vs pre-trained "
+                                f"({', '.join(houses)})").name)
     headline = main.get("tables", {}).get(str(HEADLINE_WINDOW_MIN), {})
     return {"main_30min": {m: {"used": v["used"], "unused": v["unused"], "spread": v["spread"]}
                            for m, v in headline.get("methods", {}).items()}, "files": files}
