@@ -14,7 +14,7 @@ import numpy as np
 from homer_sim.catalog import ObjectClass
 from homer_sim.shapes import cavity
 
-MAX_WIDTH = 0.13  # m: widest grasp (stroke 0.14 m minus a margin)
+MAX_WIDTH = 0.15  # m: widest grasp (stroke 0.16 m minus a margin)
 MIN_HEIGHT = 0.008  # m: thinner objects leave the pads nothing to hold above the support
 PAD_HALF = 0.025  # m: half length of a finger pad along the approach axis
 SUPPORT_CLEARANCE = 0.003  # m between the fingertips and the supporting surface
@@ -29,7 +29,7 @@ ROUND_PAST = 0.01  # m: the pads reach this far past a round object's centre
 FACE_MIN_TURN = math.radians(3.0)  # rad an object's face must turn off the furniture's front for "-faced" grasps
 ROUND_TURNS = tuple(math.radians(a) for a in (35.0, -35.0))  # rad off the furniture's front normal: slanted side
 # grasps of round objects
-GRIPPER_OPEN = 0.07  # m per finger, the gripper's stroke
+GRIPPER_OPEN = 0.08  # m per finger, the gripper's stroke
 SHELF_PITCHES = (0.0, math.radians(30), math.radians(45), math.radians(60), math.radians(90))  # rad below the
 # horizontal of an in-furniture grasp's approach: 0 is the side grasp, 90 degrees straight down
 FINGER_HALF_THICKNESS = 0.016  # m: half the finger links' extent across the pads' plane

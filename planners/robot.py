@@ -30,7 +30,7 @@ BASE_GEOMS = ("base_shell", "torso_sleeve", "torso_column")
 ARM_GEOMS = ("upperarm_col", "elbow_col", "forearm_col", "wrist_flex_col", "palm", "finger_left_link",
              "finger_right_link", "finger_left_pad", "finger_right_pad")
 BASE_RADIUS = 0.28  # m
-GRIPPER_MAX = 0.07  # m per finger (0.14 m stroke)
+GRIPPER_MAX = 0.08  # m per finger (0.16 m stroke)
 HOME_KEY = "home"
 DEFAULT_POSE = (3.0, 1.3, 0.0)  # (x m, y m, yaw rad): dining room, facing east into free floor
 
