@@ -9,7 +9,7 @@ clothes and a few extras.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from homer_sim.errors import unknown_name
 
@@ -46,6 +46,9 @@ class ObjectClass:
     rgba: colour, components in 0..1.
     category: "object" or "prop".
     supports: other objects may rest ON it.
+    handle: (length, width, height) in m of a grip feature centred on top of the object, its length along the
+        body x, or None (see _HANDLES). It is part of the bounding box: the body under it is size[2] - height
+        tall.
     """
 
     name: str
@@ -55,6 +58,7 @@ class ObjectClass:
     rgba: tuple[float, float, float, float]
     category: str = "object"
     supports: bool = False
+    handle: tuple[float, float, float] | None = None
 
     @property
     def lying(self) -> bool:
@@ -178,6 +182,25 @@ _ROWS: tuple[tuple, ...] = (
     ("water_bottle", "cylinder", (0.07, 0.07, 0.24), 0.8, _GLASS),
 )
 
+# Grip features, (length, width, height) in m: carry handles (bag, detergent jug, vacuum cleaner, CD player),
+# a trash bag's tie, a headset's band, and on folded cloth the fold a gripper pinches up (cloth is rigid here,
+# like every object). A robot takes these objects by the feature: their bodies are wider than its grasp.
+_HANDLES: dict[str, tuple[float, float, float]] = {
+    "bag": (0.14, 0.025, 0.06),
+    "laundry_detergent": (0.10, 0.03, 0.05),
+    "vacuum_cleaner": (0.14, 0.03, 0.06),
+    "cd_player": (0.18, 0.025, 0.035),
+    "trashbag": (0.04, 0.04, 0.07),
+    "headset": (0.15, 0.03, 0.035),
+    "towel": (0.22, 0.03, 0.025),
+    "clothes_shirt": (0.22, 0.03, 0.02),
+    "clothes_pants": (0.26, 0.03, 0.025),
+    "clothes_dress": (0.26, 0.03, 0.02),
+    "clothes_jacket": (0.30, 0.04, 0.035),
+    "blanket": (0.40, 0.04, 0.04),
+    "comforter": (0.50, 0.05, 0.06),
+}
+
 
 def _check(cls: ObjectClass) -> ObjectClass:
     """Assert the invariants of one table row (family, sizes, footprint, cylinder axes); return it."""
@@ -190,6 +213,9 @@ def _check(cls: ObjectClass) -> ObjectClass:
         assert sx == sy or sy == sz, f"{cls.name}: upright needs x == y, lying needs y == z"
     if cls.family == "sphere":
         assert sx == sy == sz, cls
+    if cls.handle is not None:
+        length, width, height = cls.handle
+        assert length <= sx and width <= sy and MIN_EXTENT <= height < sz and not cls.supports, cls
     return cls
 
 
@@ -197,9 +223,10 @@ def _build(rows: tuple[tuple, ...]) -> dict[str, ObjectClass]:
     """The catalog dict from the table rows, checked; names are unique."""
     catalog: dict[str, ObjectClass] = {}
     for row in rows:
-        cls = _check(ObjectClass(*row))
+        cls = _check(replace(ObjectClass(*row), handle=_HANDLES.get(row[0])))
         assert cls.name not in catalog, cls.name
         catalog[cls.name] = cls
+    assert set(_HANDLES) <= set(catalog), set(_HANDLES) - set(catalog)
     return catalog
 
 

@@ -9,7 +9,7 @@ the body frame, whose origin is the center of the class's bounding box (z up); l
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
@@ -199,10 +199,22 @@ def _solid_part(cls: ObjectClass) -> _Part:
     return _Part("main", cylinder, _cylinder_volume(radius, half_len), size=(radius, half_len))
 
 
+def _handled_parts(cls: ObjectClass) -> list[_Part]:
+    """A solid body under the class's grip feature (`ObjectClass.handle`, a box centred on top), both inside the
+    bounding box."""
+    length, width, height = cls.handle
+    sx, sy, sz = cls.size
+    body = _solid_part(replace(cls, size=(sx, sy, sz - height), handle=None))
+    return [replace(body, pos=(0.0, 0.0, -height / 2.0)),
+            _Part("handle", mujoco.mjtGeom.mjGEOM_BOX, length * width * height,
+                  size=(length / 2.0, width / 2.0, height / 2.0), pos=(0.0, 0.0, (sz - height) / 2.0))]
+
+
 def _object_parts(cls: ObjectClass) -> list[_Part]:
-    """Collision parts of `cls` in its body frame: one for solids; bottom, walls, handles for containers."""
+    """Collision parts of `cls` in its body frame: one for solids (two with a grip feature); bottom, walls,
+    handles for containers."""
     if not cls.is_container:
-        return [_solid_part(cls)]
+        return [_solid_part(cls)] if cls.handle is None else _handled_parts(cls)
     parts = [_bottom_part(cls), *_wall_parts(cls)]
     if cls.family == "mug":
         parts += _mug_handle(cls)

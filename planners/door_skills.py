@@ -108,17 +108,18 @@ class ClearanceCheck:
                     & (d.contact.dist[: d.ncon] < -self.FINGER_GRAZE))
         return not touching.any()
 
-    def clear(self, q: np.ndarray, articulation=None, value: float = 0.0, held: Held | None = None) -> bool:
+    def clear(self, q: np.ndarray, articulation=None, value: float = 0.0, held: Held | None = None,
+              fingers: bool = False) -> bool:
         """True if configuration q (shape (13,)) keeps MARGIN from the apartment, with `articulation` (if
         given) at joint value `value` (rad or m), `held` (if given) in the hand, and everything else where it
-        is now."""
+        is now. With `fingers`, the fingers are checked too (a hand swinging free touches nothing at all)."""
         d = self.scratch
         d.qpos[:] = self.world.data.qpos
         d.qpos[self.qpos_adr] = q
         if articulation is not None:
             d.qpos[articulation.qpos_adr] = value
         mujoco.mj_kinematics(self.model, d)
-        robot, checked = self.robot, self.checked
+        robot, checked = self.robot, self.robot if fingers else self.checked
         if held is None:
             mujoco.mj_collision(self.model, d)
         else:

@@ -40,6 +40,7 @@ PALM_MARGIN = 0.01  # m between the palm's low edge and an object's front face
 ROUND_FAMILIES = ("cylinder", "sphere", "cup", "bowl")  # families whose upright footprint is a disk
 TOP_MARGIN = 0.025  # m per finger between an open pad and the object before a grasp from above closes,
 TOP_NARROW_MARGIN = 0.005  # m: the same where a neighbour stands too close for the wide opening
+HANDLE_APPROACH = 0.06  # m: the approach onto a handle from above (nothing else stands as high)
 
 
 @dataclass(frozen=True)
@@ -105,6 +106,9 @@ def ungraspable_reason(cls: ObjectClass) -> str | None:
         return f"flat, {sz * 1000:.0f} mm thin: thinner than {MIN_HEIGHT * 1000:.0f} mm"
     if cls.is_container:
         return None if cavity(cls) is not None else "container without a cavity"
+    if cls.handle is not None:  # taken by its grip feature
+        width = min(cls.handle[:2])
+        return None if width <= MAX_WIDTH else f"its {width * 100:.0f} cm handle is wider than the grasp"
     if min(sx, sy) > MAX_WIDTH:
         return f"{min(sx, sy) * 100:.0f} cm across its narrow side, wider than the {MAX_WIDTH * 100:.0f} cm grasp"
     return None
@@ -115,6 +119,8 @@ def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_x
     (wxyz), best first: across its narrow side, then turned a quarter, the fingers open TOP_MARGIN past it, then
     both again opened only TOP_NARROW_MARGIN past it; rim pinches for containers (on the rim nearest the robot
     at `robot_xy`)."""
+    if cls.handle is not None:
+        return handle_grasps(cls, position, quat)
     sx, sy, sz = cls.size
     yaw = 2.0 * math.atan2(quat[3], quat[0])
     support = position[2] - sz / 2
@@ -133,6 +139,41 @@ def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_x
             if span <= MAX_WIDTH:
                 grasps.append(Grasp(centre, top_rotation(finger_yaw), min(GRIPPER_OPEN, span / 2 + margin),
                                     kind + suffix))
+    return grasps
+
+
+def handle_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray,
+                  outward: np.ndarray | None = None) -> list[Grasp]:
+    """Grasps of the grip feature on top of an upright object of a class with one (`ObjectClass.handle`), at
+    `position` (m, body centre) with body `quat` (wxyz), best first. The fingertips stop SUPPORT_CLEARANCE
+    above the body under the feature.
+
+    On an open top (`outward` None): from straight above, the fingers closing across the feature's width, open
+    TOP_MARGIN past it, then TOP_NARROW_MARGIN; a square feature (a tie) also turned a quarter. Inside furniture
+    (`outward`, a horizontal unit vector out of its front, shape (2,) or (3,)): approached SHELF_PITCHES down
+    against `outward` (not level: the hand must come over the body), the fingers closing along the front.
+    """
+    length, width, height = cls.handle
+    yaw = 2.0 * math.atan2(quat[3], quat[0])
+    top = position[2] + cls.size[2] / 2
+    if outward is None:
+        centre = np.array([position[0], position[1], max(top - TOP_DEPTH, top - height + PAD_HALF + SUPPORT_CLEARANCE)])
+        turns = ((0.0, width), (math.pi / 2, length)) if length <= MAX_WIDTH else ((0.0, width),)
+        return [Grasp(centre, top_rotation(yaw + math.pi / 2 + turn), min(GRIPPER_OPEN, span / 2 + margin),
+                      f"handle{'-turned' if turn else ''}{suffix}", HANDLE_APPROACH)
+                for margin, suffix in ((TOP_MARGIN, ""), (TOP_NARROW_MARGIN, "-narrow")) for turn, span in turns]
+    out, across, _ = _shelf_frame(outward, quat)
+    span = _box_extent(across, length, width, yaw)  # the feature's extent along the front
+    if span > MAX_WIDTH:
+        return []
+    grasps = []
+    for pitch in SHELF_PITCHES[1:]:
+        x = math.cos(pitch) * -out + np.array([0.0, 0.0, -math.sin(pitch)])
+        tip_drop = PAD_HALF * math.sin(pitch) + FINGER_HALF_THICKNESS * math.cos(pitch)
+        z = max(top - TOP_DEPTH, top - height + tip_drop + SUPPORT_CLEARANCE)
+        grasps.append(Grasp(np.array([position[0], position[1], z]), np.column_stack([x, across, np.cross(x, across)]),
+                            min(GRIPPER_OPEN, span / 2 + TOP_MARGIN), f"handle-{math.degrees(pitch):.0f}",
+                            SHELF_APPROACH))
     return grasps
 
 
@@ -182,6 +223,8 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
     outward: horizontal unit vector (shape (2,) or (3,)) out of the furniture's front; front: m from the
     object's centre to the front plane along it. Best first; empty when no grasp fits the shape.
     """
+    if cls.handle is not None:
+        return handle_grasps(cls, position, quat, outward)
     sx, sy, sz = cls.size
     out, _, yaw = _shelf_frame(outward, quat)
     hollow = cavity(cls)
@@ -192,7 +235,7 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
     grasps += _pitched_grasps(cls, position, quat, out)
     face = _face_normal(out, yaw, cls)
     turn_cos = float(face @ out)
-    if turn_cos < math.cos(FACE_MIN_TURN):
+    if turn_cos < math.cos(FACE_MIN_TURN) or (not grasps and turn_cos < 1.0 - 1e-12):  # a hair off square
         faced = side_grasps(cls, position, quat, face, front / turn_cos) or side_grasps(cls, position, quat, face,
                                                                                           -np.inf)
         grasps += [replace(g, kind=f"{g.kind}-faced") for g in faced + _pitched_grasps(cls, position, quat, face)]
@@ -263,8 +306,14 @@ def _extent(direction: np.ndarray, cls: ObjectClass, yaw: float) -> float:
     """Extent (m) along horizontal unit `direction` (shape (3,)) of the footprint of `cls` turned by `yaw`."""
     if _round(cls):
         return cls.size[0]
-    return abs(direction[0] * math.cos(yaw) + direction[1] * math.sin(yaw)) * cls.size[0] + abs(
-        -direction[0] * math.sin(yaw) + direction[1] * math.cos(yaw)) * cls.size[1]
+    return _box_extent(direction, cls.size[0], cls.size[1], yaw)
+
+
+def _box_extent(direction: np.ndarray, sx: float, sy: float, yaw: float) -> float:
+    """Extent (m) along horizontal unit `direction` (shape (3,)) of an sx by sy m rectangle turned by `yaw`
+    rad, to the micrometre (a box square to `direction` measures its side, not a hair more)."""
+    return round(abs(direction[0] * math.cos(yaw) + direction[1] * math.sin(yaw)) * sx + abs(
+        -direction[0] * math.sin(yaw) + direction[1] * math.cos(yaw)) * sy, 6)
 
 
 def _tilted_rims(hollow, position: np.ndarray, yaw: float, support: float, out: np.ndarray) -> list[Grasp]:

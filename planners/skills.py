@@ -51,7 +51,8 @@ ENTRY_STEP = 0.05  # m between checked configurations on the way in
 PASS_OVER = 0.03  # m between a carried object and a surface it is carried over before it is put down
 PULL_BASE_COST = 0.1  # IK damping on the base while drawing an object out: the base backs away
 LEAD_HEIGHTS = (0.15, 0.3)  # m above a grasp's entry point the arm may first swing to, then come down
-SWING_STEP = 0.1  # rad between checked configurations of a joint-space swing
+SWING_STEP = 0.02  # rad between checked configurations of a joint-space swing (a fingertip 0.9 m out moves
+# under 2 cm: it cannot pass through a drawer front unseen)
 UPRIGHT = 0.7  # z component of an object's up axis below which a put-down object has fallen over
 PITCHED_HAND = 0.25  # horizontal part of the grip x axis above which the hand does not count as pointing down
 LEVEL_HAND = 0.7  # horizontal part of the grip x axis above which the hand counts as held level
@@ -246,12 +247,13 @@ class Robot:
         return None
 
     def _swing_clear(self, q_from: np.ndarray, q_to: np.ndarray, held: Held | None = None) -> bool:
-        """Whether the joint-space move q_from -> q_to (each shape (13,), base at q_to's) keeps the arm (and
-        `held`, an object in the hand) clear, checked every SWING_STEP rad of the largest joint change."""
+        """Whether the joint-space move q_from -> q_to (each shape (13,), base at q_to's) keeps the arm, the
+        fingers (they swing free) and `held`, an object in the hand, clear, checked every SWING_STEP rad of the
+        largest joint change."""
         q_from = q_from.copy()
         q_from[:3] = q_to[:3]
         steps = max(1, int(np.ceil(np.max(np.abs(q_to[3:11] - q_from[3:11])) / SWING_STEP)))
-        return all(self.clearance.clear(q_from + s * (q_to - q_from), held=held)
+        return all(self.clearance.clear(q_from + s * (q_to - q_from), held=held, fingers=True)
                    for s in np.linspace(0.0, 1.0, steps + 1)[1:])
 
     def _checked_line(self, q: np.ndarray, points: list[np.ndarray], quat: np.ndarray, held: Held | None = None

@@ -121,6 +121,24 @@ def test_geoms_inside_bounding_box_and_mass(all_classes: mujoco.MjModel) -> None
         assert low[2] == pytest.approx(-half[2], abs=1e-6), name  # rests on its bottom
 
 
+def test_grip_features_stand_on_top_of_their_bodies(all_classes: mujoco.MjModel) -> None:
+    model = all_classes
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    handled = [(index + 1, cls) for index, cls in enumerate(CATALOG.values()) if cls.handle is not None]
+    assert len(handled) >= 10
+    for body, cls in handled:
+        handle = model.geom(f"{cls.name}/handle").id
+        assert model.geom_bodyid[handle] == body
+        low, high = _geom_world_extent(model, data, handle) - data.xpos[body]
+        length, width, height = cls.handle
+        assert high - low == pytest.approx([length, width, height], abs=1e-6), cls.name
+        assert high[2] == pytest.approx(cls.size[2] / 2, abs=1e-6), cls.name  # its top is the object's top
+        main = model.geom(f"{cls.name}/main").id
+        assert _geom_world_extent(model, data, main)[1][2] - data.xpos[body][2] == pytest.approx(
+            cls.size[2] / 2 - height, abs=1e-6), cls.name  # the body ends where the feature begins
+
+
 def test_names_are_prefixed_and_instances_coexist() -> None:
     spec = _scene()
     _place(spec, CATALOG["mug"], "mug_a", (0.0, 0.0))

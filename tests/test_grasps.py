@@ -9,6 +9,7 @@ import pytest
 
 from homer_sim.catalog import CATALOG
 from planners.grasps import (
+    FINGER_HALF_THICKNESS,
     GRIPPER_OPEN,
     MAX_WIDTH,
     PAD_HALF,
@@ -16,6 +17,7 @@ from planners.grasps import (
     SUPPORT_CLEARANCE,
     TOP_MARGIN,
     TOP_NARROW_MARGIN,
+    handle_grasps,
     shelf_grasps,
     side_grasps,
     top_grasps,
@@ -69,3 +71,30 @@ def test_grasps_from_above_open_wide_then_narrow_and_stop_above_the_support() ->
                                                              paste.size[1] / 2 + TOP_NARROW_MARGIN])
     tip_z = grasps[0].position[2] - PAD_HALF  # the hand points down: the fingertips are below the grip site
     assert tip_z == pytest.approx(SUPPORT_CLEARANCE)
+
+
+def test_handled_objects_are_taken_by_the_handle_from_above_or_pitched_into_a_shelf() -> None:
+    bag = CATALOG["bag"]  # 35 x 15 x 30 cm, its 14 x 2.5 x 6 cm handle along its x
+    length, width, height = bag.handle
+    body_top = bag.size[2] - height
+    position = np.array([0.0, 0.0, bag.size[2] / 2])
+    from_above = handle_grasps(bag, position, _yawed(30.0))
+    assert [g.kind for g in from_above] == ["handle", "handle-turned", "handle-narrow", "handle-turned-narrow"]
+    first = from_above[0]
+    finger = first.rotation[:, 1]
+    assert abs(math.degrees(math.atan2(finger[1], finger[0]))) == pytest.approx(120.0)  # across the handle
+    assert first.pre_opening == pytest.approx(width / 2 + TOP_MARGIN)
+    assert first.position[2] - PAD_HALF >= body_top + SUPPORT_CLEARANCE - 1e-9  # the fingertips stay off the body
+    assert first.position[2] < bag.size[2]  # and the pads hold the handle
+    assert [g.kind for g in top_grasps(bag, position, _yawed(30.0), np.zeros(2))] == [g.kind for g in from_above]
+    pitched = shelf_grasps(bag, position, _yawed(0.0), OUT, front=0.2)  # the handle runs front to back
+    assert pitched and all(g.kind.startswith("handle-") and g.rotation[2, 0] < -0.4 for g in pitched)  # down
+    for g in pitched:
+        pitch = math.asin(-g.rotation[2, 0])
+        tip_drop = PAD_HALF * math.sin(pitch) + FINGER_HALF_THICKNESS * math.cos(pitch)
+        assert g.position[2] - tip_drop >= body_top + SUPPORT_CLEARANCE - 1e-9
+        assert g.pre_opening == pytest.approx(width / 2 + TOP_MARGIN)
+    across = shelf_grasps(bag, position, _yawed(90.0), OUT, front=0.2)  # 14 cm along the front: opened fully
+    assert across and all(g.pre_opening == GRIPPER_OPEN for g in across)
+    comforter = CATALOG["comforter"]  # its 50 cm fold along the front: no grasp
+    assert shelf_grasps(comforter, np.array([0.0, 0.0, comforter.size[2] / 2]), _yawed(90.0), OUT, 0.3) == []
