@@ -84,13 +84,14 @@ def suite_classes() -> tuple[dict[str, str], dict[str, str]]:
 
 
 def quick_subset(included: dict[str, str]) -> dict[str, str]:
-    """One class of each shape family (the first in layout order), the fast representative subset."""
+    """The fast representative subset: one class of each shape family and one taken by a grip feature (a
+    handle, a tie, a fold), the first of each in layout order."""
+    kinds = [lambda c, f=family: c.family == f for family in FAMILIES] + [lambda c: c.handle is not None]
     chosen: dict[str, str] = {}
-    for family in FAMILIES:
-        for cls, name in included.items():
-            if CATALOG[cls].family == family:
-                chosen[cls] = name
-                break
+    for kind in kinds:
+        cls = next((cls for cls in included if kind(CATALOG[cls]) and cls not in chosen), None)
+        if cls is not None:
+            chosen[cls] = included[cls]
     return chosen
 
 
