@@ -30,6 +30,7 @@ from planners.grasps import (
 )
 from planners.ik import IKSolver
 from planners.navigation import CLEARANCE, NavigationError, Navigator
+from planners.neighbours import neighbour_footprints
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 LIFT = 0.15  # m
@@ -384,7 +385,7 @@ class Robot:
         if out is None:
             out = self.navigator.front_normal(node)
             front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
-            grasps = shelf_grasps(cls, position, quat, out, front)
+            grasps = shelf_grasps(cls, position, quat, out, front, neighbour_footprints(self.world, name))
         else:  # side grasps, then pitched ones (a hand pointing straight down does not fit under a shelf)
             front = -np.inf
             grasps = [g for g in shelf_grasps(cls, position, quat, out, front) if not g.kind.endswith("-90")]

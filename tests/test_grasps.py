@@ -12,10 +12,14 @@ from planners.grasps import (
     GRIPPER_OPEN,
     MAX_WIDTH,
     PAD_HALF,
+    PALM_MARGIN,
     ROUND_PAST,
     SUPPORT_CLEARANCE,
     TOP_MARGIN,
     TOP_NARROW_MARGIN,
+    footprint,
+    palm_blockers,
+    palm_shift,
     shelf_grasps,
     side_grasps,
     top_grasps,
@@ -69,3 +73,24 @@ def test_grasps_from_above_open_wide_then_narrow_and_stop_above_the_support() ->
                                                              paste.size[1] / 2 + TOP_NARROW_MARGIN])
     tip_z = grasps[0].position[2] - PAD_HALF  # the hand points down: the fingertips are below the grip site
     assert tip_z == pytest.approx(SUPPORT_CLEARANCE)
+
+
+def test_the_palm_keeps_in_front_of_a_tall_neighbour_by_its_upper_edge() -> None:
+    """Pitched 30 degrees down, the palm's front face leans in as it rises: its upper edge (0.035 m behind the
+    grip site and 0.03 m off it, in the face) lies 0.035 cos 30 - 0.03 sin 30 = 0.0153 m out of the grip site,
+    so a tall neighbour whose front is 0.08 m out needs the grip site 0.08 + PALM_MARGIN - 0.0153 m out."""
+    pitch = math.radians(30.0)
+    upper = 0.035 * math.cos(pitch) - 0.03 * math.sin(pitch)
+    assert palm_shift(pitch, 0.13, [(0.08, 0.36)]) == pytest.approx(0.08 + PALM_MARGIN - upper)
+    # one whose top lies below the face's low edge (0.035 sin 30 - 0.03 cos 30 = -0.0085 m) is passed over
+    assert palm_shift(pitch, 0.13, [(0.08, 0.13 - 0.0085 - PALM_MARGIN - 0.001)]) == 0.0
+
+
+def test_only_neighbours_within_the_palm_width_block_it() -> None:
+    out, across = np.array([0.0, 1.0, 0.0]), np.array([-1.0, 0.0, 0.0])
+    box = CATALOG["oil"]  # 7 cm square
+    beside = footprint(box, np.array([0.08, 0.045, 0.2]), _yawed(0.0))  # 8 cm aside, its front 8 cm out
+    far = footprint(box, np.array([0.3, 0.045, 0.2]), _yawed(0.0))  # 30 cm aside: past the 18 cm palm
+    blockers = palm_blockers([(beside, 0.36), (far, 0.36)], np.zeros(3), out, across)
+    assert len(blockers) == 1
+    assert blockers[0] == (pytest.approx(0.045 + 0.035), 0.36)
