@@ -42,6 +42,8 @@ TOP_MARGIN = 0.025  # m per finger between an open pad and the object before a g
 TOP_NARROW_MARGIN = 0.005  # m: the same where a neighbour stands too close for the wide opening
 PALM_HALF_WIDTH = 0.09  # m: half the palm's extent along the finger travel
 ROUND_POINTS = 16  # points on the outline of a round footprint
+OFFSET_MARGIN = 0.005  # m between the object and the near finger of an off-centre grasp, opened wide
+OFFSET_MIN = 0.01  # m: off-centre grasps that move the palm less are not worth a try
 
 
 @dataclass(frozen=True)
@@ -136,6 +138,19 @@ def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_x
                 grasps.append(Grasp(centre, top_rotation(finger_yaw), min(GRIPPER_OPEN, span / 2 + margin),
                                     kind + suffix))
     return grasps
+
+
+def offset_grasps(cls: ObjectClass, quat: np.ndarray, grasp: Grasp) -> list[Grasp]:
+    """`grasp` (from above) moved off the object's centre along the finger travel, either way, the fingers
+    opened fully (GRIPPER_OPEN) so the near one still passes OFFSET_MARGIN beside the object: the 18 cm palm
+    keeps clear of a wall or a drawer side on the other side; closing, the near finger slides the object
+    (body `quat`, wxyz) to the middle. Empty where that moves the palm less than OFFSET_MIN."""
+    y = grasp.rotation[:, 1]
+    shift = GRIPPER_OPEN - _extent(y, cls, 2.0 * math.atan2(quat[3], quat[0])) / 2 - OFFSET_MARGIN
+    if shift < OFFSET_MIN:
+        return []
+    return [replace(grasp, position=grasp.position + sign * shift * y, pre_opening=GRIPPER_OPEN,
+                    kind=f"{grasp.kind}-offset{'+' if sign > 0 else '-'}") for sign in (1.0, -1.0)]
 
 
 def side_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -11,6 +12,7 @@ from homer_sim.catalog import CATALOG
 from planners.grasps import (
     GRIPPER_OPEN,
     MAX_WIDTH,
+    OFFSET_MARGIN,
     PAD_HALF,
     PALM_MARGIN,
     ROUND_PAST,
@@ -18,6 +20,7 @@ from planners.grasps import (
     TOP_MARGIN,
     TOP_NARROW_MARGIN,
     footprint,
+    offset_grasps,
     palm_blockers,
     palm_shift,
     shelf_grasps,
@@ -94,3 +97,18 @@ def test_only_neighbours_within_the_palm_width_block_it() -> None:
     blockers = palm_blockers([(beside, 0.36), (far, 0.36)], np.zeros(3), out, across)
     assert len(blockers) == 1
     assert blockers[0] == (pytest.approx(0.045 + 0.035), 0.36)
+
+
+def test_an_off_centre_grasp_keeps_the_near_finger_beside_the_object() -> None:
+    charger = CATALOG["charger"]  # 6 x 4.5 cm: across its 4.5 cm side the fingers open fully, 8 cm each
+    position = np.array([0.0, 0.0, charger.size[2] / 2])
+    grasp = top_grasps(charger, position, _yawed(0.0), np.array([1.0, 0.0]))[0]
+    moved = offset_grasps(charger, _yawed(0.0), grasp)
+    assert [g.kind for g in moved] == ["top-offset+", "top-offset-"]
+    for g in moved:
+        shift = float(np.linalg.norm(g.position - grasp.position))
+        assert g.pre_opening == GRIPPER_OPEN
+        assert GRIPPER_OPEN - shift - 0.045 / 2 == pytest.approx(OFFSET_MARGIN)  # the near finger still clears it
+        assert abs(float((g.position - grasp.position) @ grasp.rotation[:, 1])) == pytest.approx(shift)
+    wide = replace(charger, size=(0.2, 0.14, 0.03))  # 14 cm across: the palm would move only 5 mm, no try
+    assert offset_grasps(wide, _yawed(0.0), top_grasps(wide, position, _yawed(0.0), np.zeros(2))[0]) == []
