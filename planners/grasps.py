@@ -41,6 +41,10 @@ ROUND_FAMILIES = ("cylinder", "sphere", "cup", "bowl")  # families whose upright
 TOP_MARGIN = 0.025  # m per finger between an open pad and the object before a grasp from above closes,
 TOP_NARROW_MARGIN = 0.005  # m: the same where a neighbour stands too close for the wide opening
 HANDLE_APPROACH = 0.06  # m: the approach onto a handle from above (nothing else stands as high)
+PALM_HALF_WIDTH = 0.09  # m: half the palm's extent along the finger travel
+ROUND_POINTS = 16  # points on the outline of a round footprint
+OFFSET_MARGIN = 0.005  # m between the object and the near finger of an off-centre grasp, opened wide
+OFFSET_MIN = 0.01  # m: off-centre grasps that move the palm less are not worth a try
 
 
 @dataclass(frozen=True)
@@ -177,6 +181,19 @@ def handle_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray,
     return grasps
 
 
+def offset_grasps(cls: ObjectClass, quat: np.ndarray, grasp: Grasp) -> list[Grasp]:
+    """`grasp` (from above) moved off the object's centre along the finger travel, either way, the fingers
+    opened fully (GRIPPER_OPEN) so the near one still passes OFFSET_MARGIN beside the object: the 18 cm palm
+    keeps clear of a wall or a drawer side on the other side; closing, the near finger slides the object
+    (body `quat`, wxyz) to the middle. Empty where that moves the palm less than OFFSET_MIN."""
+    y = grasp.rotation[:, 1]
+    shift = GRIPPER_OPEN - _extent(y, cls, 2.0 * math.atan2(quat[3], quat[0])) / 2 - OFFSET_MARGIN
+    if shift < OFFSET_MIN:
+        return []
+    return [replace(grasp, position=grasp.position + sign * shift * y, pre_opening=GRIPPER_OPEN,
+                    kind=f"{grasp.kind}-offset{'+' if sign > 0 else '-'}") for sign in (1.0, -1.0)]
+
+
 def side_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,
                 front: float = np.inf) -> list[Grasp]:
     """Horizontal grasps of an upright object on a shelf inside furniture, approached from the front.
@@ -211,7 +228,7 @@ def side_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwar
 
 
 def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,
-                 front: float = np.inf) -> list[Grasp]:
+                 front: float = np.inf, neighbours: list[tuple[np.ndarray, float]] = ()) -> list[Grasp]:
     """Grasps of an object on a shelf inside furniture, approached from its open front: the horizontal side
     grasp (see `side_grasps`; with the palm inside the furniture where the front part alone is too shallow to
     hold), then approaches pitched SHELF_PITCHES down into the compartment with the fingers
@@ -221,7 +238,9 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
     `_turned_sides`), and rim pinches of containers (only those for wide ones).
 
     outward: horizontal unit vector (shape (2,) or (3,)) out of the furniture's front; front: m from the
-    object's centre to the front plane along it. Best first; empty when no grasp fits the shape.
+    object's centre to the front plane along it; neighbours: (footprint, see `footprint`; top z, m) of what
+    stands beside the object on its shelf: a pitched grasp keeps the palm in front of those in its way. Best
+    first; empty when no grasp fits the shape.
     """
     if cls.handle is not None:
         return handle_grasps(cls, position, quat, outward)
@@ -232,20 +251,26 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
     grasps = side_grasps(cls, position, quat, outward, front) or side_grasps(cls, position, quat, outward, -np.inf)
     if hollow is not None and min(sx, sy) > MAX_WIDTH - 0.02:
         return grasps + rims
-    grasps += _pitched_grasps(cls, position, quat, out)
+    grasps += _pitched_grasps(cls, position, quat, out, neighbours)
     face = _face_normal(out, yaw, cls)
     turn_cos = float(face @ out)
     if turn_cos < math.cos(FACE_MIN_TURN) or (not grasps and turn_cos < 1.0 - 1e-12):  # a hair off square
         faced = side_grasps(cls, position, quat, face, front / turn_cos) or side_grasps(cls, position, quat, face,
                                                                                           -np.inf)
-        grasps += [replace(g, kind=f"{g.kind}-faced") for g in faced + _pitched_grasps(cls, position, quat, face)]
+        grasps += [replace(g, kind=f"{g.kind}-faced")
+                   for g in faced + _pitched_grasps(cls, position, quat, face, neighbours)]
     return grasps + _turned_sides(cls, position, quat, out) + rims
 
 
-def _pitched_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray) -> list[Grasp]:
+def _pitched_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,
+                    neighbours: list[tuple[np.ndarray, float]] = ()) -> list[Grasp]:
     """Grasps approached SHELF_PITCHES down against `outward` (shape (3,)), the fingers closing horizontally
-    across the object near its top (from straight above also along the approach); see `shelf_grasps`."""
+    across the object near its top (from straight above also along the approach); the palm's low front edge
+    stays PALM_MARGIN in front of the object and of the `neighbours` (footprints) in its way; see `shelf_grasps`.
+    """
     out, across, yaw = _shelf_frame(outward, quat)
+    own = (footprint(cls, position, quat), position[2] + cls.size[2] / 2)
+    blockers = palm_blockers([own, *neighbours], position, out, across)
     support, top = position[2] - cls.size[2] / 2, position[2] + cls.size[2] / 2
     grasps = []
     for pitch in SHELF_PITCHES[1:]:
@@ -257,14 +282,63 @@ def _pitched_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, ou
             tip_drop = PAD_HALF * math.sin(pitch) + FINGER_HALF_THICKNESS * math.cos(pitch)
             z = max(top - TOP_DEPTH, support + tip_drop + SUPPORT_CLEARANCE)
             depth = _extent(out, cls, yaw)
-            edge = PALM_LOW_EDGE[0] * math.cos(pitch) + PALM_LOW_EDGE[1] * math.sin(pitch)  # out of the grip
-            shift = 0.0 if pitch == SHELF_PITCHES[-1] else max(0.0, depth / 2 + PALM_MARGIN - edge)
+            shift = 0.0 if pitch == SHELF_PITCHES[-1] else palm_shift(pitch, z, blockers)
             if shift > depth / 2 - SIDE_MIN_OVERLAP / 2:
                 continue  # the pads would hold only the front edge
             centre = np.array([position[0], position[1], z]) + out * shift
             grasps.append(Grasp(centre, np.column_stack([x, y, np.cross(x, y)]), min(GRIPPER_OPEN, width / 2 + 0.025),
                                 f"shelf-{math.degrees(pitch):.0f}", SHELF_APPROACH))
     return grasps
+
+
+def footprint(cls: ObjectClass, position: np.ndarray, quat: np.ndarray) -> np.ndarray:
+    """The outline of an upright object's footprint at `position` (m) turned by body `quat` (wxyz): world xy
+    points (m, shape (n, 2)), the box's four corners or ROUND_POINTS on a round one's circle."""
+    yaw = 2.0 * math.atan2(quat[3], quat[0])
+    if _round(cls):
+        angles = np.linspace(0.0, 2.0 * math.pi, ROUND_POINTS, endpoint=False)
+        local = cls.size[0] / 2 * np.column_stack([np.cos(angles), np.sin(angles)])
+    else:
+        local = np.array([[sx, sy] for sx in (-1, 1) for sy in (-1, 1)])[[0, 1, 3, 2]] * np.asarray(cls.size[:2]) / 2
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.asarray(position[:2]) + local @ np.array([[c, s], [-s, c]])
+
+
+def palm_blockers(neighbours: list[tuple[np.ndarray, float]], position: np.ndarray, out: np.ndarray,
+                  across: np.ndarray) -> list[tuple[float, float]]:
+    """(front, top) of each of the `neighbours` ((footprint, see `footprint`; top z, m)) in the palm's way: within
+    PALM_HALF_WIDTH plus PALM_MARGIN either side of `position` along `across` (shape (3,)); front: how far (m)
+    its foremost part in that band lies out from `position` along horizontal unit `out` (shape (3,))."""
+    blockers = []
+    for outline, top in neighbours:
+        closed = np.vstack([outline, outline[:1]])
+        fronts = []
+        for a, b in zip(closed[:-1], closed[1:], strict=False):  # each edge sampled densely: it may cross the band
+            points = a + np.linspace(0.0, 1.0, 11)[:, None] * (b - a) - np.asarray(position[:2])
+            inside = np.abs(points @ across[:2]) < PALM_HALF_WIDTH + PALM_MARGIN
+            fronts += list(points[inside] @ out[:2])
+        if fronts:
+            blockers.append((max(fronts), float(top)))
+    return blockers
+
+
+def palm_shift(pitch: float, grip_z: float, blockers: list[tuple[float, float]]) -> float:
+    """How far (m) out along the approach's horizontal the grip site must stand from an object's centre so that
+    the palm's front face, pitched `pitch` rad down with the grip site at `grip_z` m, keeps PALM_MARGIN in front
+    of every blocker ((front m out from the centre, top z m), see `palm_blockers`) where it is lower than the
+    blocker's top plus PALM_MARGIN (the face leans in as it rises: its upper edge counts for a tall one)."""
+    c, s = math.cos(pitch), math.sin(pitch)
+    back, half = PALM_LOW_EDGE
+    low = (back * c + half * s, back * s - half * c)  # (out, up) of the face's low and high edges from the grip
+    high = (back * c - half * s, back * s + half * c)
+    shift = 0.0
+    for front, top in blockers:
+        h = min(high[1], top + PALM_MARGIN - grip_z)
+        if h < low[1]:
+            continue  # the whole face passes above it
+        along = low[0] + (high[0] - low[0]) * (h - low[1]) / (high[1] - low[1])
+        shift = max(shift, front + PALM_MARGIN - along)
+    return shift
 
 
 def _turned_sides(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray) -> list[Grasp]:

@@ -23,6 +23,7 @@ from planners.door_skills import ARC_BASE_COST, ClearanceCheck, Held, PartMover
 from planners.grasps import (
     Grasp,
     matrix_to_quat,
+    offset_grasps,
     shelf_grasps,
     slerp,
     top_grasps,
@@ -30,6 +31,7 @@ from planners.grasps import (
 )
 from planners.ik import IKSolver
 from planners.navigation import CLEARANCE, NavigationError, Navigator
+from planners.neighbours import neighbour_footprints
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 LIFT = 0.15  # m
@@ -347,8 +349,20 @@ class Robot:
         except NavigationError as error:
             stand_failure = str(error)  # a base pose checked for the grasp itself may still reach it
         failures = side_failures
-        grasps = top_grasps(cls, position, quat, self.controller.q()[:2])
-        for grasp in sorted(grasps, key=lambda g: not self._fingers_fit(g)):  # stable: the blocked ones last
+        grasps = sorted(top_grasps(cls, position, quat, self.controller.q()[:2]),
+                        key=lambda g: not self._fingers_fit(g))  # stable: the blocked ones last
+        offsets = [o for g in grasps for o in offset_grasps(cls, quat, g) if self._fingers_fit(o)]
+        unchecked = []
+        for grasp in grasps + offsets:  # those with a way in clear of the apartment first
+            outcome = self._grasp_from_above(name, grasp, stand_failure, checked_only=True)
+            if outcome is None:
+                unchecked += [] if "-offset" in grasp.kind else [grasp]
+                continue
+            if outcome.success:
+                self.held = name
+                return outcome
+            failures.append(f"{grasp.kind}: {outcome.reason}")
+        for grasp in unchecked:
             outcome = self._grasp_from_above(name, grasp, stand_failure)
             if outcome.success:
                 self.held = name
@@ -356,13 +370,17 @@ class Robot:
             failures.append(f"{grasp.kind}: {outcome.reason}")
         return SkillResult(False, f"{name}: every grasp failed ({'; '.join(failures)})")
 
-    def _grasp_from_above(self, name: str, grasp: Grasp, stand_failure: str) -> SkillResult:
+    def _grasp_from_above(self, name: str, grasp: Grasp, stand_failure: str, checked_only: bool = False
+                          ) -> SkillResult | None:
         """Try `grasp` from a base pose checked for it (the arm clear of the apartment on the way in), else from
-        where the robot stands, unless it found no place to stand (`stand_failure`, the reason)."""
+        where the robot stands, unless it found no place to stand (`stand_failure`, the reason). With
+        `checked_only`, None (nothing moved) where no checked base pose reaches it."""
         try:
             path_in = self._go_to_grasp(grasp, np.zeros(3), 0.0, here_first=not stand_failure)
         except NavigationError as error:
             return SkillResult(False, str(error))
+        if path_in is None and checked_only:
+            return None
         if path_in is None and stand_failure:
             return SkillResult(False, f"{stand_failure}, and no checked base pose reaches the grasp")
         return self._try_grasp(name, grasp, path_in=path_in)
@@ -386,7 +404,7 @@ class Robot:
         if out is None:
             out = self.navigator.front_normal(node)
             front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
-            grasps = shelf_grasps(cls, position, quat, out, front)
+            grasps = shelf_grasps(cls, position, quat, out, front, neighbour_footprints(self.world, name))
         else:  # side grasps, then pitched ones (a hand pointing straight down does not fit under a shelf)
             front = -np.inf
             grasps = [g for g in shelf_grasps(cls, position, quat, out, front) if not g.kind.endswith("-90")]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -12,12 +13,18 @@ from planners.grasps import (
     FINGER_HALF_THICKNESS,
     GRIPPER_OPEN,
     MAX_WIDTH,
+    OFFSET_MARGIN,
     PAD_HALF,
+    PALM_MARGIN,
     ROUND_PAST,
     SUPPORT_CLEARANCE,
     TOP_MARGIN,
     TOP_NARROW_MARGIN,
+    footprint,
     handle_grasps,
+    offset_grasps,
+    palm_blockers,
+    palm_shift,
     shelf_grasps,
     side_grasps,
     top_grasps,
@@ -98,3 +105,39 @@ def test_handled_objects_are_taken_by_the_handle_from_above_or_pitched_into_a_sh
     assert across and all(g.pre_opening == GRIPPER_OPEN for g in across)
     comforter = CATALOG["comforter"]  # its 50 cm fold along the front: no grasp
     assert shelf_grasps(comforter, np.array([0.0, 0.0, comforter.size[2] / 2]), _yawed(90.0), OUT, 0.3) == []
+
+
+def test_the_palm_keeps_in_front_of_a_tall_neighbour_by_its_upper_edge() -> None:
+    """Pitched 30 degrees down, the palm's front face leans in as it rises: its upper edge (0.035 m behind the
+    grip site and 0.03 m off it, in the face) lies 0.035 cos 30 - 0.03 sin 30 = 0.0153 m out of the grip site,
+    so a tall neighbour whose front is 0.08 m out needs the grip site 0.08 + PALM_MARGIN - 0.0153 m out."""
+    pitch = math.radians(30.0)
+    upper = 0.035 * math.cos(pitch) - 0.03 * math.sin(pitch)
+    assert palm_shift(pitch, 0.13, [(0.08, 0.36)]) == pytest.approx(0.08 + PALM_MARGIN - upper)
+    # one whose top lies below the face's low edge (0.035 sin 30 - 0.03 cos 30 = -0.0085 m) is passed over
+    assert palm_shift(pitch, 0.13, [(0.08, 0.13 - 0.0085 - PALM_MARGIN - 0.001)]) == 0.0
+
+
+def test_only_neighbours_within_the_palm_width_block_it() -> None:
+    out, across = np.array([0.0, 1.0, 0.0]), np.array([-1.0, 0.0, 0.0])
+    box = CATALOG["oil"]  # 7 cm square
+    beside = footprint(box, np.array([0.08, 0.045, 0.2]), _yawed(0.0))  # 8 cm aside, its front 8 cm out
+    far = footprint(box, np.array([0.3, 0.045, 0.2]), _yawed(0.0))  # 30 cm aside: past the 18 cm palm
+    blockers = palm_blockers([(beside, 0.36), (far, 0.36)], np.zeros(3), out, across)
+    assert len(blockers) == 1
+    assert blockers[0] == (pytest.approx(0.045 + 0.035), 0.36)
+
+
+def test_an_off_centre_grasp_keeps_the_near_finger_beside_the_object() -> None:
+    charger = CATALOG["charger"]  # 6 x 4.5 cm: across its 4.5 cm side the fingers open fully, 8 cm each
+    position = np.array([0.0, 0.0, charger.size[2] / 2])
+    grasp = top_grasps(charger, position, _yawed(0.0), np.array([1.0, 0.0]))[0]
+    moved = offset_grasps(charger, _yawed(0.0), grasp)
+    assert [g.kind for g in moved] == ["top-offset+", "top-offset-"]
+    for g in moved:
+        shift = float(np.linalg.norm(g.position - grasp.position))
+        assert g.pre_opening == GRIPPER_OPEN
+        assert GRIPPER_OPEN - shift - 0.045 / 2 == pytest.approx(OFFSET_MARGIN)  # the near finger still clears it
+        assert abs(float((g.position - grasp.position) @ grasp.rotation[:, 1])) == pytest.approx(shift)
+    wide = replace(charger, size=(0.2, 0.14, 0.03))  # 14 cm across: the palm would move only 5 mm, no try
+    assert offset_grasps(wide, _yawed(0.0), top_grasps(wide, position, _yawed(0.0), np.zeros(2))[0]) == []
