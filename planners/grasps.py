@@ -27,6 +27,8 @@ PALM_SETBACK = 0.027  # m: the palm's front face lies 0.035 m behind the grip si
 SIDE_MIN_OVERLAP = 0.015  # m of the object's depth between the pads
 ROUND_PAST = 0.01  # m: the pads reach this far past a round object's centre
 FACE_MIN_TURN = math.radians(3.0)  # rad an object's face must turn off the furniture's front for "-faced" grasps
+FACE_FIRST_TURN = math.radians(8.0)  # rad beyond which "-faced" grasps go first: pads closing on a box turned
+# further turn it between them, and it keeps turning in the hand
 ROUND_TURNS = tuple(math.radians(a) for a in (35.0, -35.0))  # rad off the furniture's front normal: slanted side
 # grasps of round objects
 GRIPPER_OPEN = 0.08  # m per finger, the gripper's stroke
@@ -234,8 +236,9 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
     hold), then approaches pitched SHELF_PITCHES down into the compartment with the fingers
     closing horizontally across the object near its top (short enough for the wrist to pass under the shelf
     above; whether it does is for a collision check of the arm); then the same square to the object's own face
-    nearest the front where it stands turned ("-faced"), slanted side grasps of round objects (see
-    `_turned_sides`), and rim pinches of containers (only those for wide ones).
+    nearest the front where it stands turned ("-faced"; first where it is turned past FACE_FIRST_TURN), slanted
+    side grasps of round objects (see `_turned_sides`), and rim pinches of containers (only those for wide
+    ones).
 
     outward: horizontal unit vector (shape (2,) or (3,)) out of the furniture's front; front: m from the
     object's centre to the front plane along it; neighbours: (footprint, see `footprint`; top z, m) of what
@@ -257,8 +260,9 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
     if turn_cos < math.cos(FACE_MIN_TURN) or (not grasps and turn_cos < 1.0 - 1e-12):  # a hair off square
         faced = side_grasps(cls, position, quat, face, front / turn_cos) or side_grasps(cls, position, quat, face,
                                                                                           -np.inf)
-        grasps += [replace(g, kind=f"{g.kind}-faced")
-                   for g in faced + _pitched_grasps(cls, position, quat, face, neighbours)]
+        faced = [replace(g, kind=f"{g.kind}-faced") for g in faced + _pitched_grasps(cls, position, quat, face,
+                                                                                       neighbours)]
+        grasps = faced + grasps if turn_cos < math.cos(FACE_FIRST_TURN) else grasps + faced
     return grasps + _turned_sides(cls, position, quat, out) + rims
 
 
