@@ -141,3 +141,12 @@ def test_an_off_centre_grasp_keeps_the_near_finger_beside_the_object() -> None:
         assert abs(float((g.position - grasp.position) @ grasp.rotation[:, 1])) == pytest.approx(shift)
     wide = replace(charger, size=(0.2, 0.14, 0.03))  # 14 cm across: the palm would move only 5 mm, no try
     assert offset_grasps(wide, _yawed(0.0), top_grasps(wide, position, _yawed(0.0), np.zeros(2))[0]) == []
+
+
+def test_a_box_turned_past_eight_degrees_is_taken_square_to_its_face_first() -> None:
+    dryer = CATALOG["hairdryer"]  # 24 x 9 cm, its long side into the furniture
+    position = np.array([0.0, 0.0, dryer.size[2] / 2])
+    turned = shelf_grasps(dryer, position, _yawed(12.0), OUT, front=0.2)
+    assert turned[0].kind.endswith("-faced") and any(not g.kind.endswith("-faced") for g in turned)
+    slightly = shelf_grasps(dryer, position, _yawed(5.0), OUT, front=0.2)
+    assert not slightly[0].kind.endswith("-faced") and any(g.kind.endswith("-faced") for g in slightly)
