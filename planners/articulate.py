@@ -161,3 +161,19 @@ def base_candidates(grip_pos: np.ndarray, grip_rot: np.ndarray, previous_xy: np.
     return sorted(poses, key=lambda p: float(np.linalg.norm(np.array(p[:2]) - previous_xy)) + 0.2 * abs(
         (p[2] - heading + math.pi) % (2 * math.pi) - math.pi))
 
+
+def drawer_rim(world, furniture: str, position: np.ndarray) -> float | None:
+    """Height (m) of the top of the front of the drawer of `furniture` that holds the point `position` (m,
+    shape (3,)) above its floor and below that top, or None where no drawer does. Something lifted out of a
+    drawer must rise past it before it is carried towards the robot standing in front."""
+    model, data = world.model, world.data
+    for a in world.articulations.values():
+        if a.furniture != furniture or a.joint_type != "slide":
+            continue
+        floor, front = model.geom(f"{a.name}/bottom").id, model.geom(f"{a.name}/front").id
+        local = data.geom_xmat[floor].reshape(3, 3).T @ (np.asarray(position) - data.geom_xpos[floor])
+        half = model.geom_size[floor]
+        rim = float(data.geom_xpos[front][2] + model.geom_size[front][2])
+        if abs(local[0]) <= half[0] and abs(local[1]) <= half[1] and 0.0 < local[2] and position[2] < rim:
+            return rim
+    return None

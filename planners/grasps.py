@@ -51,13 +51,15 @@ OFFSET_MIN = 0.01  # m: off-centre grasps that move the palm less are not worth 
 
 @dataclass(frozen=True)
 class Grasp:
-    """A grip-site pose in world coordinates, the finger opening before closing (m per finger) and a label."""
+    """A grip-site pose in world coordinates, the finger opening before closing (m per finger), a label, the
+    approach and the least lift."""
 
     position: np.ndarray
     rotation: np.ndarray
     pre_opening: float
     kind: str
     approach: float = 0.12  # m the gripper travels along its x axis onto the grasp (short inside furniture)
+    lift: float = 0.0  # m the object must rise straight up after the fingers close, at least (out of a drawer)
 
     def quat(self) -> np.ndarray:
         """The rotation as a unit wxyz quaternion."""

@@ -7,7 +7,7 @@ with success or a clear failure reason; a failed grasp is retried from the next 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -17,7 +17,7 @@ from homer_sim.observe import SceneGraphObserver
 from homer_sim.placement import place_world
 from homer_sim.spots import Spots
 from homer_sim.validate import ROBOT_RADIUS
-from planners.articulate import base_candidates
+from planners.articulate import base_candidates, drawer_rim
 from planners.control import CARRY_MOTION, FREE_MOTION, Controller
 from planners.door_skills import ARC_BASE_COST, ClearanceCheck, Held, PartMover
 from planners.grasps import (
@@ -35,6 +35,7 @@ from planners.neighbours import neighbour_footprints
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 LIFT = 0.15  # m
+RIM_CLEARANCE = 0.03  # m an object lifted out of a drawer rises past the top of its front
 HOLD_SECONDS = 0.5
 MIN_HELD_OPENING = 0.001  # m per finger: closed further means the fingers missed
 GRASP_BASE_COST = 100.0  # IK damping on the base while grasping
@@ -349,7 +350,9 @@ class Robot:
         except NavigationError as error:
             stand_failure = str(error)  # a base pose checked for the grasp itself may still reach it
         failures = side_failures
-        grasps = sorted(top_grasps(cls, position, quat, self.controller.q()[:2]),
+        rim = None if furniture is None else drawer_rim(self.world, node, position)
+        lift = 0.0 if rim is None else rim + RIM_CLEARANCE - (position[2] - cls.size[2] / 2)  # out of the drawer
+        grasps = sorted((replace(g, lift=lift) for g in top_grasps(cls, position, quat, self.controller.q()[:2])),
                         key=lambda g: not self._fingers_fit(g))  # stable: the blocked ones last
         offsets = [o for g in grasps for o in offset_grasps(cls, quat, g) if self._fingers_fit(o)]
         unchecked = []
@@ -463,7 +466,7 @@ class Robot:
         if pull is not None:
             legs = [SIDE_LIFT * up, SIDE_PULL * pull, SIDE_RAISE * up]
         else:
-            legs = [LIFT * up]
+            legs = [max(LIFT, grasp.lift) * up]
         point = grasp.position
         for leg in legs:  # the base follows a horizontal leg; a vertical one only where the arm alone falls short
             path = self._line(point, point + leg, quat, base_cost=PULL_BASE_COST if leg[2] == 0 else GRASP_BASE_COST)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from homer_sim.world import World
-from planners.articulate import PartMotion, edge_grasp, handle_grasp
+from planners.articulate import PartMotion, drawer_rim, edge_grasp, handle_grasp
 from planners.control import Controller
 from planners.door_skills import ClearanceCheck, Held
 from planners.grasps import matrix_to_quat
@@ -107,3 +107,20 @@ def test_clearance_check_on_the_filtered_model_agrees_with_a_full_collision() ->
         assert answer == (not touching), f"configuration {k}: {q.round(3).tolist()}"
         answers.append(answer)
     assert 0.2 < np.mean(answers) < 0.8  # both answers were exercised
+
+
+def test_drawer_rim_is_the_front_top_of_the_drawer_holding_a_point() -> None:
+    world = World()
+    shirt = world.object_pose("clothes_shirt")[0]  # in the dresser's bottom drawer
+    front = world.model.geom("dresser/drawer_0/front").id
+    top = world.data.geom_xpos[front][2] + world.model.geom_size[front][2]
+    rim = drawer_rim(world, "dresser", shirt)
+    assert rim == pytest.approx(top) and rim - (shirt[2] - 0.02) > 0.2  # a 15 cm lift would not clear it
+    world.set_openness("dresser/drawer_0", 0.96)  # the drawer carries the point's drawer along: still found
+    moved = shirt + 0.96 * 0.75 * 0.5 * world.data.xaxis[world.articulation("dresser/drawer_0").joint_id]
+    assert drawer_rim(world, "dresser", moved) == pytest.approx(top)
+    above = world.model.geom("dresser/drawer_1/front").id  # the next drawer up holds a point higher up
+    assert drawer_rim(world, "dresser", shirt + np.array([0.0, 0.0, 0.3])) == pytest.approx(
+        world.data.geom_xpos[above][2] + world.model.geom_size[above][2])
+    assert drawer_rim(world, "dresser", shirt + np.array([0.0, 0.0, 1.0])) is None  # above the dresser
+    assert drawer_rim(world, "table_dining_room", world.object_pose("bowl")[0]) is None  # no drawers
