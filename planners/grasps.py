@@ -45,6 +45,10 @@ PALM_HALF_WIDTH = 0.09  # m: half the palm's extent along the finger travel
 ROUND_POINTS = 16  # points on the outline of a round footprint
 OFFSET_MARGIN = 0.005  # m between the object and the near finger of an off-centre grasp, opened wide
 OFFSET_MIN = 0.01  # m: off-centre grasps that move the palm less are not worth a try
+RIM_DEPTH = 0.015  # m below the rim of the grip site of a rim pinch (a flared wall leans away lower down)
+RIM_DEEP = PAD_HALF + 0.003  # m: the same on a straight wall: the pads' whole length on it, their top ends
+# 3 mm under the rim (the palm 7 mm above it)
+RIM_CLEARANCE = 0.03  # m the hand rises a straight-walled container's far bottom edge above its support
 
 
 @dataclass(frozen=True)
@@ -56,6 +60,8 @@ class Grasp:
     pre_opening: float
     kind: str
     approach: float = 0.12  # m the gripper travels along its x axis onto the grasp (short inside furniture)
+    lift: float = 0.0  # m the hand rises at least after closing (0: the skill's own lift)
+    hang: bool = False  # lifted, the hand turns about its z axis until the object hangs (see `hang_rotation`)
 
     def quat(self) -> np.ndarray:
         """The rotation as a unit wxyz quaternion."""
@@ -410,17 +416,55 @@ def _tilted_rims(hollow, position: np.ndarray, yaw: float, support: float, out: 
 
 
 def _rim_grasps(hollow, position: np.ndarray, yaw: float, support: float, robot_xy: np.ndarray) -> list[Grasp]:
-    """Pinches of a container's wall at the rim, the nearest rim point first, then 30 degrees either side."""
+    """Pinches of a container's wall at the rim, the fingers closing radially: the rim point nearest the robot
+    at `robot_xy` first, then 30 degrees either side. A straight wall (a bin) is pinched RIM_DEEP at the rim
+    point farthest from the robot instead: held at one point of its rim, the container's weight tilts it about
+    the tangent there (a 44 cm bin some 20 degrees, its far side on the floor after a 15 cm lift) and keeps it
+    creeping round in the pads while its centre of mass is off to the side; so the hand rises `rim_lift` (the
+    lowest edge clears the floor) and turns until the container hangs (`hang`, see `hang_rotation`), its bottom
+    swinging away from the robot (from the near rim it swings onto the robot's base)."""
     c, s = math.cos(yaw), math.sin(yaw)
     centre = position[:2] + np.array([c * hollow.center_xy[0] - s * hollow.center_xy[1],
                                       s * hollow.center_xy[0] + c * hollow.center_xy[1]])
     toward = math.atan2(robot_xy[1] - centre[1], robot_xy[0] - centre[0])
     rim_z = position[2] + hollow.rim_z
+    straight = _straight(hollow)
+    z = max(rim_z - (RIM_DEEP if straight else RIM_DEPTH), support + PAD_HALF + SUPPORT_CLEARANCE)
+    lift = rim_lift(hollow, rim_z - support, rim_z - z) if straight else 0.0
     grasps = []
     for delta in (0.0, math.radians(30), -math.radians(30)):
-        angle = toward + delta
+        angle = toward + delta + (math.pi if straight else 0.0)
         radial = np.array([math.cos(angle), math.sin(angle)])
         xy = centre + radial * (hollow.rim_radius + 0.004)
-        z = max(rim_z - 0.015, support + PAD_HALF + SUPPORT_CLEARANCE)
-        grasps.append(Grasp(np.array([xy[0], xy[1], z]), top_rotation(angle), 0.03, "rim"))
+        grasps.append(Grasp(np.array([xy[0], xy[1], z]), top_rotation(angle), 0.03, "rim", lift=lift,
+                            hang=straight))
     return grasps
+
+
+def _straight(hollow) -> bool:
+    """Whether a container's inner wall is vertical (as wide at the floor as at the rim)."""
+    return abs(hollow.floor_radius - hollow.rim_radius) < 1e-6
+
+
+def rim_lift(hollow, height: float, depth: float) -> float:
+    """How far (m) the hand must rise after pinching a straight-walled container of `height` m at `depth` m
+    below its rim so that, whatever it tilts about the pinch, its far bottom edge stays RIM_CLEARANCE above
+    the support: the grip site ends the edge's distance from it (the wall's diameter by its height) above."""
+    far = math.hypot(2.0 * hollow.rim_radius, height - depth)
+    return float(far + RIM_CLEARANCE - (height - depth))
+
+
+def hang_rotation(rotation: np.ndarray, grip: np.ndarray, com: np.ndarray) -> np.ndarray:
+    """The grip rotation (shape (3, 3)) turned about its own z axis until a held object's centre of mass `com`
+    (m, shape (3,)) lies straight below the grip site `grip` (m, shape (3,)), the object turning with the hand:
+    then its weight pulls along the pads' plane (sliding friction holds it) instead of twisting it about the
+    tangent of a rim pinch (the pads' couple holds that only while they creep). The grip z axis must be
+    horizontal; an offset of `com` along it stays."""
+    axis = rotation[:, 2]
+    v = com - grip
+    v = v - (v @ axis) * axis  # in the plane the turn moves it in
+    down = np.array([0.0, 0.0, -1.0])
+    angle = math.atan2(float(np.cross(v, down) @ axis), float(v @ down))
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    turn = np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k @ k  # Rodrigues
+    return turn @ rotation

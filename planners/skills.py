@@ -22,6 +22,7 @@ from planners.control import CARRY_MOTION, FREE_MOTION, Controller
 from planners.door_skills import ARC_BASE_COST, ClearanceCheck, Held, PartMover
 from planners.grasps import (
     Grasp,
+    hang_rotation,
     matrix_to_quat,
     offset_grasps,
     shelf_grasps,
@@ -463,7 +464,7 @@ class Robot:
         if pull is not None:
             legs = [SIDE_LIFT * up, SIDE_PULL * pull, SIDE_RAISE * up]
         else:
-            legs = [LIFT * up]
+            legs = [max(LIFT, grasp.lift) * up]
         point = grasp.position
         for leg in legs:  # the base follows a horizontal leg; a vertical one only where the arm alone falls short
             path = self._line(point, point + leg, quat, base_cost=PULL_BASE_COST if leg[2] == 0 else GRASP_BASE_COST)
@@ -474,6 +475,11 @@ class Robot:
                 return SkillResult(False, "the lift leaves the arm's reach")
             self.controller.move_through(path)
             point = point + leg
+        if grasp.hang:  # turn the hand until the object hangs straight below the grip site
+            com = self.world.data.xipos[self.world.object_body_ids[self.world.object_index(name)]]
+            grip = self.world.data.site("robot/grip")
+            turned = hang_rotation(grip.xmat.reshape(3, 3), grip.xpos, com)
+            self.controller.move_through(self._hand_line(point, matrix_to_quat(turned), GRASP_BASE_COST) or [])
         self.world.step(int(HOLD_SECONDS / self.world.model.opt.timestep))
         lifted = self.world.object_pose(name)[0][2] - start[2]
         rise = float(sum(leg[2] for leg in legs))

@@ -141,3 +141,37 @@ def test_an_off_centre_grasp_keeps_the_near_finger_beside_the_object() -> None:
         assert abs(float((g.position - grasp.position) @ grasp.rotation[:, 1])) == pytest.approx(shift)
     wide = replace(charger, size=(0.2, 0.14, 0.03))  # 14 cm across: the palm would move only 5 mm, no try
     assert offset_grasps(wide, _yawed(0.0), top_grasps(wide, position, _yawed(0.0), np.zeros(2))[0]) == []
+
+
+def test_a_bin_is_pinched_deep_at_its_far_rim_lifted_clear_and_hung() -> None:
+    from homer_sim.shapes import cavity
+    from planners.grasps import RIM_CLEARANCE, RIM_DEEP
+
+    cls = CATALOG["basket_for_clothes"]  # 44 x 44 x 32 cm, straight walls
+    sz = cls.size[2]
+    position = np.array([0.0, 0.0, sz / 2])
+    hollow = cavity(cls)
+    grasps = top_grasps(cls, position, _yawed(0.0), np.array([-1.0, 0.0]))  # the robot on -x
+    first = grasps[0]
+    assert first.kind == "rim" and first.hang
+    assert first.position[0] == pytest.approx(hollow.rim_radius + 0.004)  # the far rim, +x
+    assert first.position[2] == pytest.approx(sz - RIM_DEEP)  # the pads' whole 5 cm length on the wall
+    assert first.rotation[:, 1] @ np.array([1.0, 0.0, 0.0]) == pytest.approx(1.0)  # closing radially
+    # whatever it tilts about the pinch, the bottom edge across the bin stays RIM_CLEARANCE above the floor
+    far = math.hypot(2 * hollow.rim_radius, RIM_DEEP - sz)
+    assert first.position[2] + first.lift - far == pytest.approx(RIM_CLEARANCE)
+    bowl = top_grasps(CATALOG["bowl"], np.array([0.0, 0.0, 0.035]), _yawed(0.0), np.array([-1.0, 0.0]))[0]
+    assert bowl.kind == "rim" and not bowl.hang and bowl.lift == 0.0 and bowl.position[0] < 0  # flared: near rim
+
+
+def test_hanging_turns_the_hand_about_its_z_axis_until_the_load_is_straight_below() -> None:
+    from planners.grasps import hang_rotation, top_rotation
+
+    rotation = top_rotation(0.0)  # pointing down, fingers along x, z along -y
+    grip = np.array([0.2, 0.0, 0.5])
+    com = grip + np.array([-0.14, 0.01, -0.25])
+    turned = hang_rotation(rotation, grip, com)
+    assert turned @ turned.T == pytest.approx(np.eye(3))
+    assert turned[:, 2] == pytest.approx(rotation[:, 2])  # about its own z axis
+    moved = turned @ rotation.T @ (com - grip)
+    assert moved == pytest.approx([0.0, 0.01, -math.hypot(0.14, 0.25)])  # below, the offset along z kept
