@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from homer_sim.catalog import ObjectClass
-from homer_sim.shapes import cavity
+from homer_sim.shapes import WALL_THICKNESS, cavity, handle_boxes
 
 MAX_WIDTH = 0.15  # m: widest grasp (stroke 0.16 m minus a margin)
 MIN_HEIGHT = 0.008  # m: thinner objects leave the pads nothing to hold above the support
@@ -49,6 +49,12 @@ RIM_DEPTH = 0.015  # m below the rim of the grip site of a rim pinch (a flared w
 RIM_DEEP = PAD_HALF + 0.003  # m: the same on a straight wall: the pads' whole length on it, their top ends
 # 3 mm under the rim (the palm 7 mm above it)
 RIM_CLEARANCE = 0.03  # m the hand rises a straight-walled container's far bottom edge above its support
+POT_HANDLE_FACING = math.radians(60.0)  # rad: a pot's side handle is taken from the front when it points at
+# most this far off the furniture's front normal
+POT_HANDLE_GAP = 0.003  # m between the pads' inner ends and the pot's wall
+POT_HANDLE_MARGIN = 0.015  # m per finger between an open pad and the handle plate
+POT_HANDLE_PITCHES = (math.radians(30.0), math.radians(45.0), math.radians(60.0))  # rad below the horizontal
+HANG_RISE = 0.15  # m a hung object's centre is to end above where it stood (its drop as it swings added)
 
 
 @dataclass(frozen=True)
@@ -60,7 +66,7 @@ class Grasp:
     pre_opening: float
     kind: str
     approach: float = 0.12  # m the gripper travels along its x axis onto the grasp (short inside furniture)
-    lift: float = 0.0  # m the hand rises at least after closing (0: the skill's own lift)
+    lift: float = 0.0  # m the hand rises at least in all after closing (the last upward leg lengthened)
     hang: bool = False  # lifted, the hand turns about its z axis until the object hangs (see `hang_rotation`)
 
     def quat(self) -> np.ndarray:
@@ -256,7 +262,7 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
     rims = [] if hollow is None else _tilted_rims(hollow, position, yaw, position[2] - sz / 2, out)
     grasps = side_grasps(cls, position, quat, outward, front) or side_grasps(cls, position, quat, outward, -np.inf)
     if hollow is not None and min(sx, sy) > MAX_WIDTH - 0.02:
-        return grasps + rims
+        return grasps + pot_handle_grasps(cls, position, quat, out) + rims
     grasps += _pitched_grasps(cls, position, quat, out, neighbours)
     face = _face_normal(out, yaw, cls)
     turn_cos = float(face @ out)
@@ -455,16 +461,48 @@ def rim_lift(hollow, height: float, depth: float) -> float:
 
 
 def hang_rotation(rotation: np.ndarray, grip: np.ndarray, com: np.ndarray) -> np.ndarray:
-    """The grip rotation (shape (3, 3)) turned about its own z axis until a held object's centre of mass `com`
-    (m, shape (3,)) lies straight below the grip site `grip` (m, shape (3,)), the object turning with the hand:
-    then its weight pulls along the pads' plane (sliding friction holds it) instead of twisting it about the
-    tangent of a rim pinch (the pads' couple holds that only while they creep). The grip z axis must be
-    horizontal; an offset of `com` along it stays."""
-    axis = rotation[:, 2]
-    v = com - grip
-    v = v - (v @ axis) * axis  # in the plane the turn moves it in
+    """The grip rotation (shape (3, 3)) turned about the grip site, by the least turn (about a horizontal axis),
+    until a held object's centre of mass `com` (m, shape (3,)) lies straight below the grip site `grip` (m,
+    shape (3,)), the object turning with the hand: then its weight pulls through the grasp instead of twisting
+    it (a rim pinch's pads hold that twist only while they creep)."""
+    v = (com - grip) / np.linalg.norm(com - grip)
     down = np.array([0.0, 0.0, -1.0])
-    angle = math.atan2(float(np.cross(v, down) @ axis), float(v @ down))
-    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-    turn = np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k @ k  # Rodrigues
+    axis = np.cross(v, down)
+    sin, cos = float(np.linalg.norm(axis)), float(v @ down)
+    if sin < 1e-9:
+        return rotation.copy()
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]]) / sin
+    turn = np.eye(3) + sin * k + (1.0 - cos) * k @ k  # Rodrigues
     return turn @ rotation
+
+
+def pot_handle_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray) -> list[Grasp]:
+    """Grasps of an upright pot at `position` (m, body centre; body `quat`, wxyz) by a flat side handle (see
+    `homer_sim.shapes.handle_boxes`) pointing within POT_HANDLE_FACING of horizontal unit `outward` (shape (3,),
+    out of the furniture's front), along the handle towards the pot: first level, the fingers closing
+    vertically on the plate (the pads' length along it); then pitched POT_HANDLE_PITCHES down, the fingers
+    closing across the plate's width on its side faces (a level hand that low is often out of the arm's reach
+    from a base pose clear of the cabinet). The pads end POT_HANDLE_GAP short of the wall. Lifted, the hand
+    turns until the pot hangs (`hang`): a 1.5 kg pot held 13 cm out twists in the pads."""
+    yaw = 2.0 * math.atan2(quat[3], quat[0])
+    c, s = math.cos(yaw), math.sin(yaw)
+    body = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    up = np.array([0.0, 0.0, 1.0])
+    grasps = []
+    for centre, half in handle_boxes(cls):
+        h = body @ np.array([math.copysign(1.0, centre[0]), 0.0, 0.0])  # horizontal, out along the handle
+        if float(h @ outward) < math.cos(POT_HANDLE_FACING):
+            continue
+        face = abs(centre[0]) - half[0] + WALL_THICKNESS[cls.family]  # m from the axis: the wall's outer face
+        for pitch in (0.0, *POT_HANDLE_PITCHES):
+            x = -math.cos(pitch) * h - math.sin(pitch) * up
+            y = up if pitch == 0.0 else np.cross(up, h)
+            # the grip site: the pads' low inner end POT_HANDLE_GAP off the wall, at least half of them on the plate
+            along = min(face + POT_HANDLE_GAP + PAD_HALF * math.cos(pitch), abs(centre[0]) + half[0])
+            offset = body @ np.array([0.0, centre[1], centre[2]]) + h * along  # from the body centre
+            drop = float(np.linalg.norm(offset)) - offset[2]  # the centre's drop once it hangs under the grip
+            opening = (half[2] if pitch == 0.0 else half[1]) + POT_HANDLE_MARGIN
+            grasps.append(Grasp(position + offset, np.column_stack([x, y, np.cross(x, y)]), opening,
+                                f"pot-handle-{math.degrees(pitch):.0f}", SHELF_APPROACH, lift=HANG_RISE + drop,
+                                hang=True))
+    return grasps

@@ -464,7 +464,8 @@ class Robot:
         if pull is not None:
             legs = [SIDE_LIFT * up, SIDE_PULL * pull, SIDE_RAISE * up]
         else:
-            legs = [max(LIFT, grasp.lift) * up]
+            legs = [LIFT * up]
+        legs[-1] = legs[-1] + max(0.0, grasp.lift - sum(leg[2] for leg in legs)) * up  # raised further
         point = grasp.position
         for leg in legs:  # the base follows a horizontal leg; a vertical one only where the arm alone falls short
             path = self._line(point, point + leg, quat, base_cost=PULL_BASE_COST if leg[2] == 0 else GRASP_BASE_COST)
@@ -479,7 +480,9 @@ class Robot:
             com = self.world.data.xipos[self.world.object_body_ids[self.world.object_index(name)]]
             grip = self.world.data.site("robot/grip")
             turned = hang_rotation(grip.xmat.reshape(3, 3), grip.xpos, com)
-            self.controller.move_through(self._hand_line(point, matrix_to_quat(turned), GRASP_BASE_COST) or [])
+            path = self._hand_line(point, matrix_to_quat(turned), GRASP_BASE_COST, partial=True)
+            if path:  # as far as the arm turns it
+                self.controller.move_through(path)
         self.world.step(int(HOLD_SECONDS / self.world.model.opt.timestep))
         lifted = self.world.object_pose(name)[0][2] - start[2]
         rise = float(sum(leg[2] for leg in legs))
