@@ -436,7 +436,10 @@ def _rim_grasps(hollow, position: np.ndarray, yaw: float, support: float, robot_
     rim_z = position[2] + hollow.rim_z
     straight = _straight(hollow)
     z = max(rim_z - (RIM_DEEP if straight else RIM_DEPTH), support + PAD_HALF + SUPPORT_CLEARANCE)
-    lift = rim_lift(hollow, rim_z - support, rim_z - z) if straight else 0.0
+    lift = 0.0
+    if straight:  # the grip site lies rim_radius out and z - position[2] up from the body centre
+        lift = max(rim_lift(hollow, rim_z - support, rim_z - z),
+                   hang_lift(np.array([hollow.rim_radius + 0.004, 0.0, z - position[2]])))
     grasps = []
     for delta in (0.0, math.radians(30), -math.radians(30)):
         angle = toward + delta + (math.pi if straight else 0.0)
@@ -458,6 +461,12 @@ def rim_lift(hollow, height: float, depth: float) -> float:
     the support: the grip site ends the edge's distance from it (the wall's diameter by its height) above."""
     far = math.hypot(2.0 * hollow.rim_radius, height - depth)
     return float(far + RIM_CLEARANCE - (height - depth))
+
+
+def hang_lift(offset: np.ndarray) -> float:
+    """How far (m) the hand must rise so that an object gripped `offset` (m, shape (3,)) from its centre ends
+    with its centre HANG_RISE above where it stood once it hangs straight below the grip site."""
+    return float(HANG_RISE + np.linalg.norm(offset) - offset[2])
 
 
 def hang_rotation(rotation: np.ndarray, grip: np.ndarray, com: np.ndarray) -> np.ndarray:
@@ -500,9 +509,8 @@ def pot_handle_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, 
             # the grip site: the pads' low inner end POT_HANDLE_GAP off the wall, at least half of them on the plate
             along = min(face + POT_HANDLE_GAP + PAD_HALF * math.cos(pitch), abs(centre[0]) + half[0])
             offset = body @ np.array([0.0, centre[1], centre[2]]) + h * along  # from the body centre
-            drop = float(np.linalg.norm(offset)) - offset[2]  # the centre's drop once it hangs under the grip
             opening = (half[2] if pitch == 0.0 else half[1]) + POT_HANDLE_MARGIN
             grasps.append(Grasp(position + offset, np.column_stack([x, y, np.cross(x, y)]), opening,
-                                f"pot-handle-{math.degrees(pitch):.0f}", SHELF_APPROACH, lift=HANG_RISE + drop,
+                                f"pot-handle-{math.degrees(pitch):.0f}", SHELF_APPROACH, lift=hang_lift(offset),
                                 hang=True))
     return grasps

@@ -145,7 +145,7 @@ def test_an_off_centre_grasp_keeps_the_near_finger_beside_the_object() -> None:
 
 def test_a_bin_is_pinched_deep_at_its_far_rim_lifted_clear_and_hung() -> None:
     from homer_sim.shapes import cavity
-    from planners.grasps import RIM_CLEARANCE, RIM_DEEP
+    from planners.grasps import HANG_RISE, RIM_CLEARANCE, RIM_DEEP
 
     cls = CATALOG["basket_for_clothes"]  # 44 x 44 x 32 cm, straight walls
     sz = cls.size[2]
@@ -159,7 +159,10 @@ def test_a_bin_is_pinched_deep_at_its_far_rim_lifted_clear_and_hung() -> None:
     assert first.rotation[:, 1] @ np.array([1.0, 0.0, 0.0]) == pytest.approx(1.0)  # closing radially
     # whatever it tilts about the pinch, the bottom edge across the bin stays RIM_CLEARANCE above the floor
     far = math.hypot(2 * hollow.rim_radius, RIM_DEEP - sz)
-    assert first.position[2] + first.lift - far == pytest.approx(RIM_CLEARANCE)
+    assert first.position[2] + first.lift - far >= RIM_CLEARANCE - 1e-9
+    # and hanging straight below the pinch, its centre ends HANG_RISE above where it stood
+    offset = first.position - position
+    assert first.lift - (np.linalg.norm(offset) - offset[2]) >= HANG_RISE - 1e-9
     bowl = top_grasps(CATALOG["bowl"], np.array([0.0, 0.0, 0.035]), _yawed(0.0), np.array([-1.0, 0.0]))[0]
     assert bowl.kind == "rim" and not bowl.hang and bowl.lift == 0.0 and bowl.position[0] < 0  # flared: near rim
 
