@@ -426,9 +426,11 @@ def _rim_grasps(hollow, position: np.ndarray, yaw: float, support: float, robot_
     at `robot_xy` first, then 30 degrees either side. A straight wall (a bin) is pinched RIM_DEEP at the rim
     point farthest from the robot instead: held at one point of its rim, the container's weight tilts it about
     the tangent there (a 44 cm bin some 20 degrees, its far side on the floor after a 15 cm lift) and keeps it
-    creeping round in the pads while its centre of mass is off to the side; so the hand rises `rim_lift` (the
-    lowest edge clears the floor) and turns until the container hangs (`hang`, see `hang_rotation`), its bottom
-    swinging away from the robot (from the near rim it swings onto the robot's base)."""
+    creeping round in the pads while its centre of mass is off to the side (4-5 mm in 3 s); so the hand rises
+    `rim_lift` (the lowest edge clears the floor; at least `hang_lift`) and turns towards where the container
+    would hang (`hang`, see `hang_rotation`), its bottom swinging away from the robot (from the near rim it
+    swings onto the robot's base). Seen in the grasp suite: the 44 cm bin turns only part of the way, the pads
+    turn about its wall and jam it (slip under 1 mm)."""
     c, s = math.cos(yaw), math.sin(yaw)
     centre = position[:2] + np.array([c * hollow.center_xy[0] - s * hollow.center_xy[1],
                                       s * hollow.center_xy[0] + c * hollow.center_xy[1]])
