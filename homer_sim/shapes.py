@@ -17,7 +17,7 @@ import trimesh
 
 from homer_sim.catalog import ObjectClass, rest_height
 
-__all__ = ["Cavity", "add_object_geoms", "cavity", "rest_height"]
+__all__ = ["Cavity", "add_object_geoms", "cavity", "handle_boxes", "rest_height"]
 
 FRICTION = (1.0, 0.005, 0.0001)  # sliding, torsional (m), rolling (m)
 CONDIM = 4
@@ -174,6 +174,12 @@ def _pot_handles(cls: ObjectClass) -> list[_Part]:
         _bar("handle_pos", (inner, -half_w, top - 1.5 * BAR), (sx, half_w, top)),
         _bar("handle_neg", (-sx, -half_w, top - 1.5 * BAR), (-inner, half_w, top)),
     ]
+
+
+def handle_boxes(cls: ObjectClass) -> list[tuple[tuple[float, float, float], tuple[float, float, float]]]:
+    """(centre, half extents) in m, body frame, of each box handle on a pot's side (-x, +x); [] for other
+    classes (a mug's C-shaped handle is not a box)."""
+    return [(part.pos, part.size) for part in _pot_handles(cls)] if cls.family == "pot" else []
 
 
 def _cylinder_volume(radius: float, half_length: float) -> float:

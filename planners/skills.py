@@ -22,6 +22,7 @@ from planners.control import CARRY_MOTION, FREE_MOTION, Controller
 from planners.door_skills import ARC_BASE_COST, ClearanceCheck, Held, PartMover
 from planners.grasps import (
     Grasp,
+    hang_rotation,
     matrix_to_quat,
     offset_grasps,
     shelf_grasps,
@@ -35,7 +36,7 @@ from planners.neighbours import neighbour_footprints
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 LIFT = 0.15  # m
-RIM_CLEARANCE = 0.03  # m an object lifted out of a drawer rises past the top of its front
+DRAWER_CLEARANCE = 0.03  # m an object lifted out of a drawer rises past the top of its front
 HOLD_SECONDS = 0.5
 MIN_HELD_OPENING = 0.001  # m per finger: closed further means the fingers missed
 GRASP_BASE_COST = 100.0  # IK damping on the base while grasping
@@ -351,9 +352,9 @@ class Robot:
             stand_failure = str(error)  # a base pose checked for the grasp itself may still reach it
         failures = side_failures
         rim = None if furniture is None else drawer_rim(self.world, node, position)
-        lift = 0.0 if rim is None else rim + RIM_CLEARANCE - (position[2] - cls.size[2] / 2)  # out of the drawer
-        grasps = sorted((replace(g, lift=lift) for g in top_grasps(cls, position, quat, self.controller.q()[:2])),
-                        key=lambda g: not self._fingers_fit(g))  # stable: the blocked ones last
+        lift = 0.0 if rim is None else rim + DRAWER_CLEARANCE - (position[2] - cls.size[2] / 2)  # out of the drawer
+        grasps = [replace(g, lift=max(g.lift, lift)) for g in top_grasps(cls, position, quat, self.controller.q()[:2])]
+        grasps.sort(key=lambda g: not self._fingers_fit(g))  # stable: the blocked ones last
         offsets = [o for g in grasps for o in offset_grasps(cls, quat, g) if self._fingers_fit(o)]
         unchecked = []
         for grasp in grasps + offsets:  # those with a way in clear of the apartment first
@@ -466,7 +467,8 @@ class Robot:
         if pull is not None:
             legs = [SIDE_LIFT * up, SIDE_PULL * pull, SIDE_RAISE * up]
         else:
-            legs = [max(LIFT, grasp.lift) * up]
+            legs = [LIFT * up]
+        legs[-1] = legs[-1] + max(0.0, grasp.lift - sum(leg[2] for leg in legs)) * up  # raised further
         point = grasp.position
         for leg in legs:  # the base follows a horizontal leg; a vertical one only where the arm alone falls short
             path = self._line(point, point + leg, quat, base_cost=PULL_BASE_COST if leg[2] == 0 else GRASP_BASE_COST)
@@ -477,6 +479,13 @@ class Robot:
                 return SkillResult(False, "the lift leaves the arm's reach")
             self.controller.move_through(path)
             point = point + leg
+        if grasp.hang:  # turn the hand until the object hangs straight below the grip site
+            com = self.world.data.xipos[self.world.object_body_ids[self.world.object_index(name)]]
+            grip = self.world.data.site("robot/grip")
+            turned = hang_rotation(grip.xmat.reshape(3, 3), grip.xpos, com)
+            path = self._hand_line(point, matrix_to_quat(turned), GRASP_BASE_COST, partial=True)
+            if path:  # as far as the arm turns it
+                self.controller.move_through(path)
         self.world.step(int(HOLD_SECONDS / self.world.model.opt.timestep))
         lifted = self.world.object_pose(name)[0][2] - start[2]
         rise = float(sum(leg[2] for leg in legs))

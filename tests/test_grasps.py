@@ -150,3 +150,64 @@ def test_a_box_turned_past_eight_degrees_is_taken_square_to_its_face_first() -> 
     assert turned[0].kind.endswith("-faced") and any(not g.kind.endswith("-faced") for g in turned)
     slightly = shelf_grasps(dryer, position, _yawed(5.0), OUT, front=0.2)
     assert not slightly[0].kind.endswith("-faced") and any(g.kind.endswith("-faced") for g in slightly)
+
+
+def test_a_bin_is_pinched_deep_at_its_far_rim_lifted_clear_and_hung() -> None:
+    from homer_sim.shapes import cavity
+    from planners.grasps import HANG_RISE, RIM_CLEARANCE, RIM_DEEP
+
+    cls = CATALOG["basket_for_clothes"]  # 44 x 44 x 32 cm, straight walls
+    sz = cls.size[2]
+    position = np.array([0.0, 0.0, sz / 2])
+    hollow = cavity(cls)
+    grasps = top_grasps(cls, position, _yawed(0.0), np.array([-1.0, 0.0]))  # the robot on -x
+    first = grasps[0]
+    assert first.kind == "rim" and first.hang
+    assert first.position[0] == pytest.approx(hollow.rim_radius + 0.004)  # the far rim, +x
+    assert first.position[2] == pytest.approx(sz - RIM_DEEP)  # the pads' whole 5 cm length on the wall
+    assert first.rotation[:, 1] @ np.array([1.0, 0.0, 0.0]) == pytest.approx(1.0)  # closing radially
+    # whatever it tilts about the pinch, the bottom edge across the bin stays RIM_CLEARANCE above the floor
+    far = math.hypot(2 * hollow.rim_radius, RIM_DEEP - sz)
+    assert first.position[2] + first.lift - far >= RIM_CLEARANCE - 1e-9
+    # and hanging straight below the pinch, its centre ends HANG_RISE above where it stood
+    offset = first.position - position
+    assert first.lift - (np.linalg.norm(offset) - offset[2]) >= HANG_RISE - 1e-9
+    bowl = top_grasps(CATALOG["bowl"], np.array([0.0, 0.0, 0.035]), _yawed(0.0), np.array([-1.0, 0.0]))[0]
+    assert bowl.kind == "rim" and not bowl.hang and bowl.lift == 0.0 and bowl.position[0] < 0  # flared: near rim
+
+
+def test_hanging_turns_the_hand_until_the_load_is_straight_below() -> None:
+    from planners.grasps import hang_rotation, top_rotation
+
+    rotation = top_rotation(0.0)  # pointing down, fingers along x, z along -y
+    grip = np.array([0.2, 0.0, 0.5])
+    com = grip + np.array([-0.14, 0.0, -0.25])
+    turned = hang_rotation(rotation, grip, com)
+    assert turned @ turned.T == pytest.approx(np.eye(3))
+    assert turned[:, 2] == pytest.approx(rotation[:, 2])  # about the horizontal axis square to the load
+    moved = turned @ rotation.T @ (com - grip)
+    assert moved == pytest.approx([0.0, 0.0, -math.hypot(0.14, 0.25)])
+
+
+def test_a_pot_on_a_shelf_is_taken_by_the_handle_facing_the_front_short_of_its_wall() -> None:
+    from homer_sim.shapes import WALL_THICKNESS, handle_boxes
+    from planners.grasps import POT_HANDLE_GAP, pot_handle_grasps
+
+    cls = CATALOG["cookingpot"]  # handles on body -x and +x
+    position = np.array([0.0, 0.0, cls.size[2] / 2])
+    out = np.array([1.0, 0.0, 0.0])
+    grasps = pot_handle_grasps(cls, position, _yawed(10.0), out)
+    assert [g.kind for g in grasps] == ["pot-handle-0", "pot-handle-30", "pot-handle-45", "pot-handle-60"]
+    (centre, half), _ = handle_boxes(cls)
+    h = np.array([math.cos(math.radians(10.0)), math.sin(math.radians(10.0)), 0.0])  # the +x handle, turned
+    face = centre[0] - half[0] + WALL_THICKNESS["pot"]
+    for g in grasps:
+        assert g.hang and g.lift > 0.15
+        assert g.rotation[:, 0] @ h < 0 and abs(g.rotation[:, 0] @ np.cross([0, 0, 1.0], h)) < 1e-9  # towards the pot
+        tip = g.position + PAD_HALF * g.rotation[:, 0] - position  # the pads' inner end
+        assert tip[:2] @ h[:2] == pytest.approx(face + POT_HANDLE_GAP)
+        assert g.position[2] - position[2] == pytest.approx(centre[2])
+    assert grasps[0].rotation[:, 1] == pytest.approx([0, 0, 1.0])  # level: closing on the plate's thickness
+    assert grasps[0].pre_opening == pytest.approx(half[2] + 0.015)
+    assert abs(grasps[1].rotation[2, 1]) < 1e-9 and grasps[1].pre_opening == pytest.approx(half[1] + 0.015)
+    assert pot_handle_grasps(cls, position, _yawed(90.0), out) == []  # neither handle faces the front
