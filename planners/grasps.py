@@ -44,6 +44,9 @@ TOP_MARGIN = 0.025  # m per finger between an open pad and the object before a g
 TOP_NARROW_MARGIN = 0.005  # m: the same where a neighbour stands too close for the wide opening
 HANDLE_APPROACH = 0.06  # m: the approach onto a handle from above (nothing else stands as high)
 PALM_HALF_WIDTH = 0.09  # m: half the palm's extent along the finger travel
+PALM_HALF_THICKNESS = 0.03  # m: half the palm's extent across the pads' plane (normal to the finger travel)
+ALONG_BEHIND = 0.12  # m behind an object's back the in-finger and the palm's upper corner of an "-along" grasp
+# may reach: a neighbour standing further back is out of their way
 ROUND_POINTS = 16  # points on the outline of a round footprint
 OFFSET_MARGIN = 0.005  # m between the object and the near finger of an off-centre grasp, opened wide
 OFFSET_MIN = 0.01  # m: off-centre grasps that move the palm less are not worth a try
@@ -277,7 +280,7 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
         faced = [replace(g, kind=f"{g.kind}-faced") for g in faced + _pitched_grasps(cls, position, quat, face,
                                                                                        neighbours)]
         grasps = faced + grasps if turn_cos < math.cos(FACE_FIRST_TURN) else grasps + faced
-    return grasps + _turned_sides(cls, position, quat, out) + rims
+    return grasps + _turned_sides(cls, position, quat, out) + _along_grasps(cls, position, quat, out, neighbours) + rims
 
 
 def _pitched_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,
@@ -309,6 +312,53 @@ def _pitched_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, ou
     return grasps
 
 
+def _along_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,
+                  neighbours: list[tuple[np.ndarray, float]] = ()) -> list[Grasp]:
+    """Grasps approached SHELF_PITCHES down (not level, not straight down) against `outward` (shape (3,)), the
+    fingers closing front to back in the approach's vertical plane ("-along"): the 18 cm palm then stands edge
+    on to the shelf's front, 6 cm across, and passes between close neighbours (or a side wall) that leave no room
+    for it face on; the wrist stays out in front of a low shelf above where one from straight down meets it.
+    Skipped where a neighbour (footprints) stands within the palm's half thickness plus PALM_MARGIN across the
+    object, in front of it or less than ALONG_BEHIND behind it. The grip site is at the object's centre near its
+    top (as `_pitched_grasps`), moved along the finger travel to the middle of what the pads sweep on the way in
+    (see `along_span`); the fingers open TOP_NARROW_MARGIN past that."""
+    out, across, yaw = _shelf_frame(outward, quat)
+    depth = _extent(out, cls, yaw)
+    band = palm_blockers(list(neighbours), position, out, across, PALM_HALF_THICKNESS)
+    if any(front > -depth / 2 - ALONG_BEHIND for front, _ in band):
+        return []
+    support, top = position[2] - cls.size[2] / 2, position[2] + cls.size[2] / 2
+    grasps = []
+    for pitch in SHELF_PITCHES[1:-1]:
+        x = math.cos(pitch) * -out + np.array([0.0, 0.0, -math.sin(pitch)])
+        y = np.cross(across, x)  # into the furniture and up
+        tip_drop = PAD_HALF * math.sin(pitch) + FINGER_HALF_THICKNESS * math.cos(pitch)
+        z = max(top - TOP_DEPTH, support + tip_drop + SUPPORT_CLEARANCE)
+        least, greatest = along_span(depth, support - z, top - z, pitch, SHELF_APPROACH)
+        opening, middle = (greatest - least) / 2 + TOP_NARROW_MARGIN, (greatest + least) / 2
+        if opening > GRIPPER_OPEN:
+            continue
+        centre = np.array([position[0], position[1], z]) + middle * y
+        grasps.append(Grasp(centre, np.column_stack([x, y, np.cross(x, y)]), opening,
+                            f"shelf-{math.degrees(pitch):.0f}-along", SHELF_APPROACH))
+    return grasps
+
+
+def along_span(depth: float, low: float, high: float, pitch: float, approach: float) -> tuple[float, float]:
+    """(least, greatest) distance (m) along the finger travel of an "-along" grasp (see `_along_grasps`; grip y:
+    into the furniture and up) from the grip site of the points of an object `depth` m deep along the approach's
+    horizontal, from `low` to `high` m (its support and top, relative to the grip site's z), centred on the grip
+    site, the hand pitched `pitch` rad down: of the points the pads (PAD_HALF either side of the grip site along
+    the grip x) sweep on their last `approach` m onto the grasp."""
+    c, s = math.cos(pitch), math.sin(pitch)
+    ys = []
+    for a in np.linspace(-depth / 2, depth / 2, 9):  # out of the furniture, m from the centre
+        for h in np.linspace(low, high, 17):
+            if -approach - PAD_HALF <= -c * a - s * h <= PAD_HALF:  # along the grip x (in and down)
+                ys.append(-s * a + c * h)
+    return (min(ys), max(ys)) if ys else (0.0, 0.0)
+
+
 def footprint(cls: ObjectClass, position: np.ndarray, quat: np.ndarray) -> np.ndarray:
     """The outline of an upright object's footprint at `position` (m) turned by body `quat` (wxyz): world xy
     points (m, shape (n, 2)), the box's four corners or ROUND_POINTS on a round one's circle."""
@@ -323,17 +373,18 @@ def footprint(cls: ObjectClass, position: np.ndarray, quat: np.ndarray) -> np.nd
 
 
 def palm_blockers(neighbours: list[tuple[np.ndarray, float]], position: np.ndarray, out: np.ndarray,
-                  across: np.ndarray) -> list[tuple[float, float]]:
+                  across: np.ndarray, half_width: float = PALM_HALF_WIDTH) -> list[tuple[float, float]]:
     """(front, top) of each of the `neighbours` ((footprint, see `footprint`; top z, m)) in the palm's way: within
-    PALM_HALF_WIDTH plus PALM_MARGIN either side of `position` along `across` (shape (3,)); front: how far (m)
-    its foremost part in that band lies out from `position` along horizontal unit `out` (shape (3,))."""
+    `half_width` (m, the palm's half extent across) plus PALM_MARGIN either side of `position` along `across`
+    (shape (3,)); front: how far (m) its foremost part in that band lies out from `position` along horizontal
+    unit `out` (shape (3,))."""
     blockers = []
     for outline, top in neighbours:
         closed = np.vstack([outline, outline[:1]])
         fronts = []
         for a, b in zip(closed[:-1], closed[1:], strict=False):  # each edge sampled densely: it may cross the band
             points = a + np.linspace(0.0, 1.0, 11)[:, None] * (b - a) - np.asarray(position[:2])
-            inside = np.abs(points @ across[:2]) < PALM_HALF_WIDTH + PALM_MARGIN
+            inside = np.abs(points @ across[:2]) < half_width + PALM_MARGIN
             fronts += list(points[inside] @ out[:2])
         if fronts:
             blockers.append((max(fronts), float(top)))

@@ -409,9 +409,10 @@ class Robot:
             out = self.navigator.front_normal(node)
             front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
             grasps = shelf_grasps(cls, position, quat, out, front, neighbour_footprints(self.world, name))
-        else:  # side grasps, then pitched ones (a hand pointing straight down does not fit under a shelf)
-            front = -np.inf
-            grasps = [g for g in shelf_grasps(cls, position, quat, out, front) if not g.kind.endswith("-90")]
+        else:  # side grasps, then pitched ones (a hand pointing straight down, or holding the object front to
+            front = -np.inf  # back, "-along", does not put it down under a shelf)
+            grasps = [g for g in shelf_grasps(cls, position, quat, out, front)
+                      if not g.kind.endswith(("-90", "-along"))]
         if not grasps:
             return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
         unreachable, failures = [], []

@@ -17,9 +17,11 @@ from planners.grasps import (
     PAD_HALF,
     PALM_MARGIN,
     ROUND_PAST,
+    SHELF_APPROACH,
     SUPPORT_CLEARANCE,
     TOP_MARGIN,
     TOP_NARROW_MARGIN,
+    along_span,
     footprint,
     handle_grasps,
     offset_grasps,
@@ -61,7 +63,8 @@ def test_a_turned_box_gets_grasps_square_to_its_own_faces() -> None:
     position = np.array([0.0, 0.0, veg.size[2] / 2])
     grasps = shelf_grasps(veg, position, _yawed(30.0), OUT, front=0.2)
     faced = [g for g in grasps if g.kind.endswith("-faced")]
-    assert faced and not [g for g in grasps if not g.kind.endswith("-faced")]
+    # across the front nothing fits; only front to back, last ("-along", the pads in the approach's plane)
+    assert faced and not [g for g in grasps if not g.kind.endswith(("-faced", "-along"))]
     for grasp in faced:  # the fingers close along one of the object's own axes
         finger = grasp.rotation[:, 1]
         assert min(abs(math.degrees(math.atan2(finger[1], finger[0])) - a) for a in (30, 120, -60, -150)) < 1e-6
@@ -211,3 +214,28 @@ def test_a_pot_on_a_shelf_is_taken_by_the_handle_facing_the_front_short_of_its_w
     assert grasps[0].pre_opening == pytest.approx(half[2] + 0.015)
     assert abs(grasps[1].rotation[2, 1]) < 1e-9 and grasps[1].pre_opening == pytest.approx(half[1] + 0.015)
     assert pot_handle_grasps(cls, position, _yawed(90.0), out) == []  # neither handle faces the front
+
+
+def test_along_grasps_close_front_to_back_past_what_the_pads_sweep() -> None:
+    """A 7 cm jar (10 cm tall) on a cupboard's floor between a tall bottle 8.7 cm aside and a side wall: the
+    18 cm palm face on does not fit, edge on (6 cm) it does. Pitched 60 degrees, gripped 2 cm below its top, the
+    pads sweep the back's top edge (sin 60 * 0.035 + cos 60 * 0.02 = 0.0403 m along the travel) and the front down
+    to where the fingertip passes (0.035 cos 60 + 0.0866 h = -PAD_HALF: h = -0.0491 m, -0.0549 m along it)."""
+    pitch = math.radians(60.0)
+    least, greatest = along_span(0.07, -0.08, 0.02, pitch, SHELF_APPROACH)
+    low = -(PAD_HALF + 0.035 * math.cos(pitch)) / math.sin(pitch)
+    assert greatest == pytest.approx(0.035 * math.sin(pitch) + 0.02 * math.cos(pitch), abs=1e-6)
+    assert least == pytest.approx(-0.035 * math.sin(pitch) + low * math.cos(pitch), abs=1e-3)
+    jam, oil = CATALOG["food_jam"], CATALOG["oil"]
+    position = np.array([0.0, 0.0, jam.size[2] / 2])
+    bottle = (footprint(oil, np.array([0.02, 0.122, 0.14]), _yawed(0.0)), 0.28)  # 12.2 cm aside, 2 cm further out
+    along = [g for g in shelf_grasps(jam, position, _yawed(0.0), OUT, 0.085, [bottle]) if g.kind.endswith("-along")]
+    assert [g.kind for g in along] == ["shelf-30-along", "shelf-45-along", "shelf-60-along"]
+    g = along[-1]
+    assert g.rotation[:, 1] == pytest.approx([-math.sin(pitch), 0.0, math.cos(pitch)], abs=1e-9)  # in and up
+    assert g.rotation[:, 0] == pytest.approx([-math.cos(pitch), 0.0, -math.sin(pitch)], abs=1e-9)
+    middle = (least + greatest) / 2  # the grip site moves to the middle of the span, along the finger travel
+    assert g.position == pytest.approx(np.array([0.0, 0.0, 0.08]) + middle * g.rotation[:, 1], abs=1e-9)
+    assert g.pre_opening == pytest.approx((greatest - least) / 2 + 0.005)
+    close = (footprint(oil, np.array([0.02, 0.07, 0.14]), _yawed(0.0)), 0.28)  # 3.5 cm off the jar's side
+    assert not [g for g in shelf_grasps(jam, position, _yawed(0.0), OUT, 0.085, [close]) if g.kind.endswith("-along")]
