@@ -210,13 +210,13 @@ class Robot:
             q = self.tuck.copy()
             q[:3] = base
             start = self.ik.solve(q, above + entry * pull, quat, base_cost=ARC_BASE_COST)
-            if not start.converged or not self.clearance.clear(start.q) or not self._unfold_clear(base, start.q[3]):
+            if not start.converged or not self.clearance.clear(start.q):
                 continue
             path = self._checked_line(start.q, [above + entry * pull, above], quat)
             if path is None or self._checked_line(path[-1], [above, grasp.position, grasp.position + np.array(
                     [0.0, 0.0, SIDE_LIFT])], quat) is None:
                 continue
-            lead = self._lead_in(start.q, above + entry * pull, quat)
+            lead = self._way_in(base, start.q, above + entry * pull, quat)
             if lead is None:
                 continue
             self.retract()
@@ -226,6 +226,20 @@ class Robot:
                 q_in[:3] = self.controller.target[:3]  # where the base really stopped
             return path_in
         return None
+
+    def _way_in(self, base: np.ndarray, q: np.ndarray, point: np.ndarray, quat: np.ndarray
+                ) -> list[np.ndarray] | None:
+        """The way from the tuck at base pose `base` (x m, y m, yaw rad) to configuration q (shape (13,), the grip
+        site at `point`, m, orientation `quat`): unfolded, then `_lead_in`; else, where unfolding touches (close
+        to a tall cupboard or its open door), straight from the tuck to q if that swing is clear (`reach` takes
+        it); None if neither."""
+        if self._unfold_clear(base, q[3]):
+            lead = self._lead_in(q, point, quat)
+            if lead is not None:
+                return lead
+        tucked = self.tucked()
+        tucked[:3] = base
+        return [q] if self._swing_clear(tucked, q) else None
 
     def _unfold_clear(self, base: np.ndarray, torso: float) -> bool:
         """Whether the arm unfolds from the tuck to `raised(torso)` at base pose `base` (x m, y m, yaw rad)
