@@ -318,15 +318,21 @@ def _along_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outw
     fingers closing front to back in the approach's vertical plane ("-along"): the 18 cm palm then stands edge
     on to the shelf's front, 6 cm across, and passes between close neighbours (or a side wall) that leave no room
     for it face on; the wrist stays out in front of a low shelf above where one from straight down meets it.
-    Skipped where a neighbour (footprints) stands within the palm's half thickness plus PALM_MARGIN across the
-    object, in front of it or less than ALONG_BEHIND behind it. The grip site is at the object's centre near its
-    top (as `_pitched_grasps`), moved along the finger travel to the middle of what the pads sweep on the way in
-    (see `along_span`); the fingers open TOP_NARROW_MARGIN past that."""
+    Skipped where a neighbour (footprints) stands within the fingers' half thickness plus PALM_MARGIN across the
+    object, in front of it or less than ALONG_BEHIND behind it (the arm's collision check does not see the
+    fingers). The grip site is at the object's centre near its top (as `_pitched_grasps`), moved across it
+    as little as keeps the palm PALM_MARGIN off such neighbours (see `along_offset`), back along the approach
+    as far as keeps the palm's face PALM_MARGIN off the object's top front corner (see `palm_gap`), and along
+    the finger travel to the middle of what the pads sweep on the way in (see `along_span`); the fingers open
+    TOP_NARROW_MARGIN past that. Skipped where the open out-finger's tip would come lower than
+    SUPPORT_CLEARANCE above the support."""
     out, across, yaw = _shelf_frame(outward, quat)
     depth = _extent(out, cls, yaw)
-    band = palm_blockers(list(neighbours), position, out, across, PALM_HALF_THICKNESS)
-    if any(front > -depth / 2 - ALONG_BEHIND for front, _ in band):
+    near = [a for a, o in _band_points(neighbours, position, out, across) if o > -depth / 2 - ALONG_BEHIND]
+    if any(abs(a) < FINGER_HALF_THICKNESS + PALM_MARGIN for a in near):
         return []
+    reach = ROUND_PAST if _round(cls) else _extent(across, cls, yaw) / 2 - FINGER_HALF_THICKNESS
+    aside = along_offset(near, max(reach, 0.0))
     support, top = position[2] - cls.size[2] / 2, position[2] + cls.size[2] / 2
     grasps = []
     for pitch in SHELF_PITCHES[1:-1]:
@@ -335,28 +341,75 @@ def _along_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outw
         tip_drop = PAD_HALF * math.sin(pitch) + FINGER_HALF_THICKNESS * math.cos(pitch)
         z = max(top - TOP_DEPTH, support + tip_drop + SUPPORT_CLEARANCE)
         least, greatest = along_span(depth, support - z, top - z, pitch, SHELF_APPROACH)
+        inset = min(0.0, palm_gap(depth, support - z, top - z, pitch, (greatest + least) / 2) - PALM_MARGIN)
+        least, greatest = along_span(depth, support - z, top - z, pitch, SHELF_APPROACH, inset)
         opening, middle = (greatest - least) / 2 + TOP_NARROW_MARGIN, (greatest + least) / 2
         if opening > GRIPPER_OPEN:
             continue
-        centre = np.array([position[0], position[1], z]) + middle * y
+        centre = np.array([position[0], position[1], z]) + middle * y + aside * across + inset * x
+        if centre[2] - opening * y[2] + PAD_HALF * x[2] < support + SUPPORT_CLEARANCE:
+            continue  # the open out-finger's tip would strike the shelf and knock the object over
         grasps.append(Grasp(centre, np.column_stack([x, y, np.cross(x, y)]), opening,
                             f"shelf-{math.degrees(pitch):.0f}-along", SHELF_APPROACH))
     return grasps
 
 
-def along_span(depth: float, low: float, high: float, pitch: float, approach: float) -> tuple[float, float]:
+def along_offset(near: list[float], reach: float) -> float:
+    """How far (m) along the shelf's front to move an "-along" grasp's grip site off the object's centre so the
+    palm (PALM_HALF_THICKNESS either side) keeps PALM_MARGIN from neighbour points `near` (m along the front from
+    the centre): the least such move within `reach` either way (the pads still on the object), else the one
+    that leaves the palm the most room (the arm's collision check decides)."""
+    shifts = sorted(np.linspace(-reach, reach, 9), key=abs)
+    room = [min((abs(a - shift) for a in near), default=math.inf) for shift in shifts]
+    for shift, free in zip(shifts, room, strict=True):
+        if free >= PALM_HALF_THICKNESS + PALM_MARGIN:
+            return float(shift)
+    return float(shifts[int(np.argmax(room))])
+
+
+def _band_points(neighbours: list[tuple[np.ndarray, float]], position: np.ndarray, out: np.ndarray,
+                 across: np.ndarray) -> list[tuple[float, float]]:
+    """(across, out) m from `position` along horizontal units `across` and `out` (each shape (3,)) of points on
+    the outlines of `neighbours` (footprints; each edge sampled at 11 points) within PALM_HALF_WIDTH of it."""
+    points = []
+    for outline, _ in neighbours:
+        closed = np.vstack([outline, outline[:1]])
+        for a, b in zip(closed[:-1], closed[1:], strict=False):
+            rel = a + np.linspace(0.0, 1.0, 11)[:, None] * (b - a) - np.asarray(position[:2])
+            points += [(float(p @ across[:2]), float(p @ out[:2])) for p in rel
+                       if abs(p @ across[:2]) < PALM_HALF_WIDTH]
+    return points
+
+
+def along_span(depth: float, low: float, high: float, pitch: float, approach: float, inset: float = 0.0
+               ) -> tuple[float, float]:
     """(least, greatest) distance (m) along the finger travel of an "-along" grasp (see `_along_grasps`; grip y:
     into the furniture and up) from the grip site of the points of an object `depth` m deep along the approach's
-    horizontal, from `low` to `high` m (its support and top, relative to the grip site's z), centred on the grip
-    site, the hand pitched `pitch` rad down: of the points the pads (PAD_HALF either side of the grip site along
-    the grip x) sweep on their last `approach` m onto the grasp."""
-    c, s = math.cos(pitch), math.sin(pitch)
-    ys = []
-    for a in np.linspace(-depth / 2, depth / 2, 9):  # out of the furniture, m from the centre
-        for h in np.linspace(low, high, 17):
-            if -approach - PAD_HALF <= -c * a - s * h <= PAD_HALF:  # along the grip x (in and down)
-                ys.append(-s * a + c * h)
+    horizontal, from `low` to `high` m (its support and top, relative to the grip site's z before the inset),
+    the hand pitched `pitch` rad down, the grip site `inset` m along the approach (grip x; negative: back out)
+    from the object's centre line: of the points the pads (PAD_HALF either side of the grip site along the
+    grip x) sweep on their last `approach` m onto the grasp."""
+    ys = [y for x, y in _along_section(depth, low, high, pitch) if -approach - PAD_HALF <= x - inset <= PAD_HALF]
     return (min(ys), max(ys)) if ys else (0.0, 0.0)
+
+
+def palm_gap(depth: float, low: float, high: float, pitch: float, middle: float) -> float:
+    """How far (m) the palm's front face (PALM_LOW_EDGE[0] behind the grip site) stands in front of an object
+    `depth` m deep along the approach's horizontal, from `low` to `high` m (relative to the grip site's z), for an
+    "-along" grasp pitched `pitch` rad down whose grip site stands `middle` m along the finger travel from the
+    object's centre line; negative where the face cuts into the object (a deep or turned object's top front
+    corner), within PALM_HALF_WIDTH of the grip site along the travel."""
+    return min((PALM_LOW_EDGE[0] + x for x, y in _along_section(depth, low, high, pitch)
+                if abs(y - middle) <= PALM_HALF_WIDTH), default=math.inf)
+
+
+def _along_section(depth: float, low: float, high: float, pitch: float) -> list[tuple[float, float]]:
+    """(x, y) m along an "-along" grasp's grip x (in and down) and y (in and up), pitched `pitch` rad, from a
+    grip site on the object's centre line, of a 9 by 17 grid over the object's section in the approach's
+    vertical plane: `depth` m deep, from `low` to `high` m (relative to the grip site's z)."""
+    c, s = math.cos(pitch), math.sin(pitch)
+    return [(-c * a - s * h, -s * a + c * h) for a in np.linspace(-depth / 2, depth / 2, 9)
+            for h in np.linspace(low, high, 17)]
 
 
 def footprint(cls: ObjectClass, position: np.ndarray, quat: np.ndarray) -> np.ndarray:

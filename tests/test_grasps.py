@@ -21,11 +21,13 @@ from planners.grasps import (
     SUPPORT_CLEARANCE,
     TOP_MARGIN,
     TOP_NARROW_MARGIN,
+    along_offset,
     along_span,
     footprint,
     handle_grasps,
     offset_grasps,
     palm_blockers,
+    palm_gap,
     palm_shift,
     shelf_grasps,
     side_grasps,
@@ -226,16 +228,34 @@ def test_along_grasps_close_front_to_back_past_what_the_pads_sweep() -> None:
     low = -(PAD_HALF + 0.035 * math.cos(pitch)) / math.sin(pitch)
     assert greatest == pytest.approx(0.035 * math.sin(pitch) + 0.02 * math.cos(pitch), abs=1e-6)
     assert least == pytest.approx(-0.035 * math.sin(pitch) + low * math.cos(pitch), abs=1e-3)
+    # the palm's face, 0.035 m behind the grip site, clears the top front corner by 0.035 - (cos 60 * 0.035 +
+    # sin 60 * 0.02) = 0.0002 m
+    assert palm_gap(0.07, -0.08, 0.02, pitch, (least + greatest) / 2) == pytest.approx(
+        0.035 - 0.035 * math.cos(pitch) - 0.02 * math.sin(pitch), abs=1e-9)
     jam, oil = CATALOG["food_jam"], CATALOG["oil"]
     position = np.array([0.0, 0.0, jam.size[2] / 2])
     bottle = (footprint(oil, np.array([0.02, 0.122, 0.14]), _yawed(0.0)), 0.28)  # 12.2 cm aside, 2 cm further out
     along = [g for g in shelf_grasps(jam, position, _yawed(0.0), OUT, 0.085, [bottle]) if g.kind.endswith("-along")]
-    assert [g.kind for g in along] == ["shelf-30-along", "shelf-45-along", "shelf-60-along"]
+    # at 30 degrees the open out-finger's tip (0.061 m out and down the travel) would strike the floor
+    assert [g.kind for g in along] == ["shelf-45-along", "shelf-60-along"]
+    for g in along:
+        tip = g.position - g.pre_opening * g.rotation[:, 1] + PAD_HALF * g.rotation[:, 0]
+        assert tip[2] >= SUPPORT_CLEARANCE
+        assert g.position[1] == pytest.approx(0.0)  # the bottle leaves the 6 cm palm room: not moved aside
     g = along[-1]
     assert g.rotation[:, 1] == pytest.approx([-math.sin(pitch), 0.0, math.cos(pitch)], abs=1e-9)  # in and up
     assert g.rotation[:, 0] == pytest.approx([-math.cos(pitch), 0.0, -math.sin(pitch)], abs=1e-9)
-    middle = (least + greatest) / 2  # the grip site moves to the middle of the span, along the finger travel
-    assert g.position == pytest.approx(np.array([0.0, 0.0, 0.08]) + middle * g.rotation[:, 1], abs=1e-9)
-    assert g.pre_opening == pytest.approx((greatest - least) / 2 + 0.005)
-    close = (footprint(oil, np.array([0.02, 0.07, 0.14]), _yawed(0.0)), 0.28)  # 3.5 cm off the jar's side
+    # the palm kept PALM_MARGIN off the top front corner: the grip site backs out along the approach
+    back = PALM_MARGIN - palm_gap(0.07, -0.08, 0.02, pitch, (least + greatest) / 2)
+    assert (g.position - np.array([0.0, 0.0, 0.08])) @ g.rotation[:, 0] == pytest.approx(-back, abs=1e-9)
+    close = (footprint(oil, np.array([0.02, 0.055, 0.14]), _yawed(0.0)), 0.28)  # 2 cm off the jar's side
     assert not [g for g in shelf_grasps(jam, position, _yawed(0.0), OUT, 0.085, [close]) if g.kind.endswith("-along")]
+
+
+def test_an_along_grasp_moves_aside_for_the_palm_only_as_far_as_the_pads_stay_on() -> None:
+    """Neighbour points 3.5 cm aside: the 6 cm palm needs 0.03 + PALM_MARGIN = 0.04 m: the grip site moves the
+    least step (of 9 within reach 0.0224 m either way, 0.0056 m apart) that clears them, 0.0056 m away. Points 2.9
+    cm one side and 5 cm the other leave 7.9 cm, less than the 8 needed: the step with the most room, -0.0112 m."""
+    assert along_offset([0.035], 0.0224) == pytest.approx(-0.0056)
+    assert along_offset([0.029, -0.05], 0.0224) == pytest.approx(-0.0112)
+    assert along_offset([], 0.0224) == 0.0
