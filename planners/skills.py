@@ -192,13 +192,14 @@ class Robot:
                                 reach, **(FREE_MOTION if self.held is None else CARRY_MOTION))
         return short
 
-    def _go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float, here_first: bool = False
-                     ) -> list[np.ndarray] | None:
+    def _go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float, here_first: bool = False,
+                     direct: bool = False) -> list[np.ndarray] | None:
         """Drive (arm tucked) to a free base pose from which the way into `grasp` is reachable with the arm
         clear of the apartment: the grip `entry` m out along `pull` (a horizontal unit vector out of the
         furniture, shape (3,)) from the approach point, in along a straight line, the approach, and SIDE_LIFT m
         above the grasp. Returns the configurations (each shape (13,)) from the entry to the approach point, or
-        None (the robot stays) if no base pose works. With `here_first`, where the robot stands is tried first."""
+        None (the robot stays) if no base pose works. With `here_first`, where the robot stands is tried first;
+        with `direct`, the arm may also swing straight from the tuck (see `_way_in`)."""
         quat = grasp.quat()
         above = grasp.position - grasp.approach * grasp.rotation[:, 0]
         obstacles = self.navigator.open_part_rects()
@@ -216,7 +217,7 @@ class Robot:
             if path is None or self._checked_line(path[-1], [above, grasp.position, grasp.position + np.array(
                     [0.0, 0.0, SIDE_LIFT])], quat) is None:
                 continue
-            lead = self._way_in(base, start.q, above + entry * pull, quat)
+            lead = self._way_in(base, start.q, above + entry * pull, quat, direct)
             if lead is None:
                 continue
             self.retract()
@@ -227,16 +228,18 @@ class Robot:
             return path_in
         return None
 
-    def _way_in(self, base: np.ndarray, q: np.ndarray, point: np.ndarray, quat: np.ndarray
+    def _way_in(self, base: np.ndarray, q: np.ndarray, point: np.ndarray, quat: np.ndarray, direct: bool = False
                 ) -> list[np.ndarray] | None:
         """The way from the tuck at base pose `base` (x m, y m, yaw rad) to configuration q (shape (13,), the grip
-        site at `point`, m, orientation `quat`): unfolded, then `_lead_in`; else, where unfolding touches (close
-        to a tall cupboard or its open door), straight from the tuck to q if that swing is clear (`reach` takes
-        it); None if neither."""
+        site at `point`, m, orientation `quat`): unfolded, then `_lead_in`; else, with `direct` (where unfolding
+        touches: close to a tall cupboard or its open door), straight from the tuck to q if that swing is clear
+        (`reach` takes it); None if neither."""
         if self._unfold_clear(base, q[3]):
             lead = self._lead_in(q, point, quat)
             if lead is not None:
                 return lead
+        if not direct:
+            return None
         tucked = self.tucked()
         tucked[:3] = base
         return [q] if self._swing_clear(tucked, q) else None
@@ -430,16 +433,22 @@ class Robot:
         if not grasps:
             return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
         unreachable, failures = [], []
-        for grasp in grasps:
-            pull = np.array([out[0], out[1], 0.0])
+        pull = np.array([out[0], out[1], 0.0])
+        # every grasp unfolding the arm first (the tried way), then those no base pose reached, swinging straight in
+        for grasp, direct in [*((g, False) for g in grasps), *((g, True) for g in grasps)]:
+            if direct and grasp.kind not in unreachable:
+                continue
             try:
-                path_in = self._go_to_grasp(grasp, pull, max(front, 0.0) + ENTRY_OUT)
+                path_in = self._go_to_grasp(grasp, pull, max(front, 0.0) + ENTRY_OUT, direct=direct)
             except NavigationError as error:
                 failures.append(f"{grasp.kind}: {error}")
                 continue
             if path_in is None:
-                unreachable.append(grasp.kind)
+                if not direct:
+                    unreachable.append(grasp.kind)
                 continue
+            if direct:
+                unreachable.remove(grasp.kind)  # reached after all: its outcome is reported instead
             outcome = self._try_grasp(name, grasp, pull=pull, path_in=path_in)
             if outcome.success:
                 self.held = name
