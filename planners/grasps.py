@@ -271,6 +271,9 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
     grasps = side_grasps(cls, position, quat, outward, front) or side_grasps(cls, position, quat, outward, -np.inf)
     if hollow is not None and min(sx, sy) > MAX_WIDTH - 0.02:
         return grasps + pot_handle_grasps(cls, position, quat, out) + rims
+    along = _along_grasps(cls, position, quat, out, neighbours)
+    if cls.family == "sphere":  # held across, pitched, a ball meets the pads past their tips and creeps out
+        grasps, along = grasps + along, []
     grasps += _pitched_grasps(cls, position, quat, out, neighbours)
     face = _face_normal(out, yaw, cls)
     turn_cos = float(face @ out)
@@ -280,7 +283,7 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
         faced = [replace(g, kind=f"{g.kind}-faced") for g in faced + _pitched_grasps(cls, position, quat, face,
                                                                                        neighbours)]
         grasps = faced + grasps if turn_cos < math.cos(FACE_FIRST_TURN) else grasps + faced
-    return grasps + _turned_sides(cls, position, quat, out) + _along_grasps(cls, position, quat, out, neighbours) + rims
+    return grasps + _turned_sides(cls, position, quat, out) + along + rims
 
 
 def _pitched_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,

@@ -259,3 +259,14 @@ def test_an_along_grasp_moves_aside_for_the_palm_only_as_far_as_the_pads_stay_on
     assert along_offset([0.035], 0.0224) == pytest.approx(-0.0056)
     assert along_offset([0.029, -0.05], 0.0224) == pytest.approx(-0.0112)
     assert along_offset([], 0.0224) == 0.0
+
+
+def test_a_ball_is_taken_front_to_back_before_across_pitched() -> None:
+    """Held across with the hand pitched 30 degrees, the grip site 2 cm below its top and pushed 2.7 cm out by
+    neighbours (the fridge's low shelf), an 8 cm apple meets the pads cos 30 * 0.027 + sin 30 * 0.02 = 0.033 m
+    along them, past their 2.5 cm half length, and creeps 5 mm in 3 s: front to back first."""
+    apple = CATALOG["food_apple"]
+    kinds = [g.kind for g in shelf_grasps(apple, np.array([0.0, 0.0, apple.size[2] / 2]), _yawed(0.0), OUT, 0.1)]
+    along = [k for k in kinds if k.endswith("-along")]
+    across = [k for k in kinds if k.startswith("shelf-") and not k.endswith("-along")]
+    assert along and across and kinds.index(along[-1]) < kinds.index(across[0])
