@@ -213,6 +213,14 @@ def offset_grasps(cls: ObjectClass, quat: np.ndarray, grasp: Grasp) -> list[Gras
                     kind=f"{grasp.kind}-offset{'+' if sign > 0 else '-'}") for sign in (1.0, -1.0)]
 
 
+def rim_approach(grasp: Grasp, rim: float, clearance: float) -> float:
+    """How far (m) a grasp from above (grip x straight down) inside a drawer approaches: at least
+    `grasp.approach`, and far enough that the open fingertips (PAD_HALF below the grip site) start `clearance` m
+    above the top of the drawer's front at `rim` (m): the hand then comes over the front, not into it (a finger
+    striking it pushes the drawer shut and the object with it)."""
+    return max(grasp.approach, rim + clearance + PAD_HALF - float(grasp.position[2]))
+
+
 def side_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,
                 front: float = np.inf) -> list[Grasp]:
     """Horizontal grasps of an upright object on a shelf inside furniture, approached from the front.

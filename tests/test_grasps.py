@@ -29,6 +29,7 @@ from planners.grasps import (
     palm_blockers,
     palm_gap,
     palm_shift,
+    rim_approach,
     shelf_grasps,
     side_grasps,
     top_grasps,
@@ -131,6 +132,17 @@ def test_only_neighbours_within_the_palm_width_block_it() -> None:
     blockers = palm_blockers([(beside, 0.36), (far, 0.36)], np.zeros(3), out, across)
     assert len(blockers) == 1
     assert blockers[0] == (pytest.approx(0.045 + 0.035), 0.36)
+
+
+def test_a_grasp_in_a_drawer_comes_down_over_the_drawer_front() -> None:
+    cd = CATALOG["cd"]  # 1 cm thin: the grip site 2.8 cm over the drawer's floor, the fingertips 3 mm over it
+    position = np.array([0.0, 0.0, 0.575])
+    grasp = top_grasps(cd, position, _yawed(0.0), np.array([1.0, 0.0]))[0]
+    approach = rim_approach(grasp, 0.712, 0.03)  # the front's top 13.7 cm over the floor
+    tips = grasp.position[2] + approach - PAD_HALF  # the open fingertips' height at the approach point
+    assert tips == pytest.approx(0.712 + 0.03)
+    assert approach > grasp.approach
+    assert rim_approach(grasp, 0.6, 0.03) == grasp.approach  # a low front: the usual approach is high enough
 
 
 def test_an_off_centre_grasp_keeps_the_near_finger_beside_the_object() -> None:
