@@ -431,7 +431,7 @@ class Robot:
         else:  # side grasps, then pitched ones (a hand pointing straight down, or holding the object front to
             front = -np.inf  # back, "-along", does not put it down under a shelf)
             grasps = [g for g in shelf_grasps(cls, position, quat, out, front)
-                      if not g.kind.endswith(("-90", "-along"))]
+                      if not g.kind.endswith(("-90", "-along")) and "-rolled" not in g.kind]
         if not grasps:
             return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
         unreachable, failures = [], []
