@@ -59,6 +59,9 @@ POT_HANDLE_FACING = math.radians(60.0)  # rad: a pot's side handle is taken from
 POT_HANDLE_GAP = 0.003  # m between the pads' inner ends and the pot's wall
 POT_HANDLE_MARGIN = 0.015  # m per finger between an open pad and the handle plate
 POT_HANDLE_PITCHES = (math.radians(30.0), math.radians(45.0), math.radians(60.0))  # rad below the horizontal
+ROLL = math.radians(40.0)  # rad a straight-down shelf grasp closing front to back leans sideways ("-rolled"): the
+# wrist, 0.29 m up the grip x, comes 0.29 (1 - cos ROLL) m lower, under a low shelf above a flat object
+ROLL_TIP_CLEARANCE = 0.005  # m the open fingertips of a "-rolled" grasp pass over the object's top on the way in
 HANG_RISE = 0.15  # m a hung object's centre is to end above where it stood (its drop as it swings added)
 
 
@@ -213,6 +216,14 @@ def offset_grasps(cls: ObjectClass, quat: np.ndarray, grasp: Grasp) -> list[Gras
                     kind=f"{grasp.kind}-offset{'+' if sign > 0 else '-'}") for sign in (1.0, -1.0)]
 
 
+def rim_approach(grasp: Grasp, rim: float, clearance: float) -> float:
+    """How far (m) a grasp from above (grip x straight down) inside a drawer approaches: at least
+    `grasp.approach`, and far enough that the open fingertips (PAD_HALF below the grip site) start `clearance` m
+    above the top of the drawer's front at `rim` (m): the hand then comes over the front, not into it (a finger
+    striking it pushes the drawer shut and the object with it)."""
+    return max(grasp.approach, rim + clearance + PAD_HALF - float(grasp.position[2]))
+
+
 def side_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,
                 front: float = np.inf) -> list[Grasp]:
     """Horizontal grasps of an upright object on a shelf inside furniture, approached from the front.
@@ -254,8 +265,8 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
     closing horizontally across the object near its top (short enough for the wrist to pass under the shelf
     above; whether it does is for a collision check of the arm); then the same square to the object's own face
     nearest the front where it stands turned ("-faced"; first where it is turned past FACE_FIRST_TURN), slanted
-    side grasps of round objects (see `_turned_sides`), and rim pinches of containers (only those for wide
-    ones).
+    side grasps of round objects (see `_turned_sides`), rim pinches of containers (only those for wide
+    ones), and last the straight-down grasps closing front to back leaning aside (see `rolled_grasps`).
 
     outward: horizontal unit vector (shape (2,) or (3,)) out of the furniture's front; front: m from the
     object's centre to the front plane along it; neighbours: (footprint, see `footprint`; top z, m) of what
@@ -283,7 +294,34 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
         faced = [replace(g, kind=f"{g.kind}-faced") for g in faced + _pitched_grasps(cls, position, quat, face,
                                                                                        neighbours)]
         grasps = faced + grasps if turn_cos < math.cos(FACE_FIRST_TURN) else grasps + faced
-    return grasps + _turned_sides(cls, position, quat, out) + along + rims
+    rolled = [r for g in grasps if g.kind.startswith("shelf-90") and abs(g.rotation[:2, 1] @ out[:2]) >= 0.5
+              for r in rolled_grasps(g, position[2] - sz / 2, position[2] + sz / 2)]
+    return grasps + _turned_sides(cls, position, quat, out) + along + rims + rolled
+
+
+def rolled_grasps(grasp: Grasp, support: float, top: float) -> list[Grasp]:
+    """A straight-down `grasp` (grip x down, y horizontal) turned ROLL about its y axis, either way ("-90-rolled+",
+    "-90-rolled-"): the pads still close horizontally on the same faces, but the wrist leans aside and comes lower,
+    under a shelf too low above a flat object for a hand pointing straight down. The grip site is as high as
+    the object's top less TOP_DEPTH allows, at least so high that the lowest fingertip corner stays
+    SUPPORT_CLEARANCE above the `support` (m); the approach (along the leaning grip x) starts where it passes
+    ROLL_TIP_CLEARANCE above the object's `top` (m)."""
+    tip_drop = PAD_HALF * math.cos(ROLL) + FINGER_HALF_THICKNESS * math.sin(ROLL)
+    z = max(top - TOP_DEPTH, support + tip_drop + SUPPORT_CLEARANCE)
+    position = np.array([grasp.position[0], grasp.position[1], z])
+    approach = max((top + ROLL_TIP_CLEARANCE - (z - tip_drop)) / math.cos(ROLL), 0.0)
+    grasps = []
+    for sign, label in ((1.0, "+"), (-1.0, "-")):
+        rotation = _axis_rotation(grasp.rotation[:, 1], sign * ROLL) @ grasp.rotation
+        grasps.append(replace(grasp, position=position, rotation=rotation, approach=approach,
+                              kind=grasp.kind.replace("-90", f"-90-rolled{label}", 1)))
+    return grasps
+
+
+def _axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    """The rotation matrix (shape (3, 3)) turning `angle` rad about unit `axis` (shape (3,)) (Rodrigues)."""
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k @ k
 
 
 def _pitched_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,

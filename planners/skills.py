@@ -25,6 +25,7 @@ from planners.grasps import (
     hang_rotation,
     matrix_to_quat,
     offset_grasps,
+    rim_approach,
     shelf_grasps,
     slerp,
     top_grasps,
@@ -370,7 +371,8 @@ class Robot:
         failures = side_failures
         rim = None if furniture is None else drawer_rim(self.world, node, position)
         lift = 0.0 if rim is None else rim + DRAWER_CLEARANCE - (position[2] - cls.size[2] / 2)  # out of the drawer
-        grasps = [replace(g, lift=max(g.lift, lift)) for g in top_grasps(cls, position, quat, self.controller.q()[:2])]
+        grasps = [replace(g, lift=max(g.lift, lift), approach=g.approach if rim is None else rim_approach(
+            g, rim, DRAWER_CLEARANCE)) for g in top_grasps(cls, position, quat, self.controller.q()[:2])]
         grasps.sort(key=lambda g: not self._fingers_fit(g))  # stable: the blocked ones last
         offsets = [o for g in grasps for o in offset_grasps(cls, quat, g) if self._fingers_fit(o)]
         unchecked = []
@@ -429,7 +431,7 @@ class Robot:
         else:  # side grasps, then pitched ones (a hand pointing straight down, or holding the object front to
             front = -np.inf  # back, "-along", does not put it down under a shelf)
             grasps = [g for g in shelf_grasps(cls, position, quat, out, front)
-                      if not g.kind.endswith(("-90", "-along"))]
+                      if not g.kind.endswith(("-90", "-along")) and "-rolled" not in g.kind]
         if not grasps:
             return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
         unreachable, failures = [], []

@@ -16,6 +16,8 @@ from planners.grasps import (
     OFFSET_MARGIN,
     PAD_HALF,
     PALM_MARGIN,
+    ROLL,
+    ROLL_TIP_CLEARANCE,
     ROUND_PAST,
     SHELF_APPROACH,
     SUPPORT_CLEARANCE,
@@ -29,6 +31,8 @@ from planners.grasps import (
     palm_blockers,
     palm_gap,
     palm_shift,
+    rim_approach,
+    rolled_grasps,
     shelf_grasps,
     side_grasps,
     top_grasps,
@@ -131,6 +135,38 @@ def test_only_neighbours_within_the_palm_width_block_it() -> None:
     blockers = palm_blockers([(beside, 0.36), (far, 0.36)], np.zeros(3), out, across)
     assert len(blockers) == 1
     assert blockers[0] == (pytest.approx(0.045 + 0.035), 0.36)
+
+
+def test_a_grasp_in_a_drawer_comes_down_over_the_drawer_front() -> None:
+    cd = CATALOG["cd"]  # 1 cm thin: the grip site 2.8 cm over the drawer's floor, the fingertips 3 mm over it
+    position = np.array([0.0, 0.0, 0.575])
+    grasp = top_grasps(cd, position, _yawed(0.0), np.array([1.0, 0.0]))[0]
+    approach = rim_approach(grasp, 0.712, 0.03)  # the front's top 13.7 cm over the floor
+    tips = grasp.position[2] + approach - PAD_HALF  # the open fingertips' height at the approach point
+    assert tips == pytest.approx(0.712 + 0.03)
+    assert approach > grasp.approach
+    assert rim_approach(grasp, 0.6, 0.03) == grasp.approach  # a low front: the usual approach is high enough
+
+
+def test_a_rolled_straight_down_grasp_keeps_the_pads_and_lowers_the_wrist() -> None:
+    deck = CATALOG["deck_of_cards"]  # 2 cm high on a shelf: straight down, the wrist meets the shelf above
+    position = np.array([0.0, 0.0, 0.82 + deck.size[2] / 2])
+    grasps = shelf_grasps(deck, position, _yawed(0.0), OUT, 0.06)
+    down = next(g for g in grasps if g.kind == "shelf-90" and abs(g.rotation[:2, 1] @ OUT) > 0.99)
+    rolled = [g for g in grasps if g.kind.startswith("shelf-90-rolled")]
+    assert [g.kind for g in rolled] == ["shelf-90-rolled+", "shelf-90-rolled-"]
+    direct = rolled_grasps(down, 0.82, 0.84)
+    assert all(np.allclose(a.rotation, b.rotation) and np.allclose(a.position, b.position)
+               for a, b in zip(rolled, direct, strict=True))
+    tip_drop = PAD_HALF * math.cos(ROLL) + FINGER_HALF_THICKNESS * math.sin(ROLL)
+    for g in rolled:
+        assert np.allclose(g.rotation[:, 1], down.rotation[:, 1])  # the pads close on the same faces
+        assert float(-g.rotation[2, 0]) == pytest.approx(math.cos(ROLL))  # the grip x leans ROLL off down
+        assert g.position[2] - tip_drop == pytest.approx(0.82 + SUPPORT_CLEARANCE)  # the lowest fingertip corner
+        start = g.position[2] - g.approach * g.rotation[2, 0]
+        assert start - tip_drop == pytest.approx(0.84 + ROLL_TIP_CLEARANCE)  # over the top on the way in
+        wrist_drop = 0.29 - 0.29 * float(-g.rotation[2, 0])
+        assert wrist_drop > 0.06  # the wrist 0.29 m up the grip x: 6.8 cm lower than straight down
 
 
 def test_an_off_centre_grasp_keeps_the_near_finger_beside_the_object() -> None:
