@@ -307,12 +307,34 @@ def _pitched_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, ou
             z = max(top - TOP_DEPTH, support + tip_drop + SUPPORT_CLEARANCE)
             depth = _extent(out, cls, yaw)
             shift = 0.0 if pitch == SHELF_PITCHES[-1] else palm_shift(pitch, z, blockers)
-            if shift > depth / 2 - SIDE_MIN_OVERLAP / 2:
-                continue  # the pads would hold only the front edge
-            centre = np.array([position[0], position[1], z]) + out * shift
-            grasps.append(Grasp(centre, np.column_stack([x, y, np.cross(x, y)]), min(GRIPPER_OPEN, width / 2 + 0.025),
-                                f"shelf-{math.degrees(pitch):.0f}", SHELF_APPROACH))
+            aside, kind = 0.0, f"shelf-{math.degrees(pitch):.0f}"
+            if shift > depth / 2 - SIDE_MIN_OVERLAP / 2:  # the pads would hold only the front edge
+                moved = palm_aside(pitch, z, [own, *neighbours], position, out, across, width,
+                                   depth / 2 - SIDE_MIN_OVERLAP / 2)
+                if moved is None:
+                    continue
+                aside, shift = moved
+                kind += "-aside"
+            centre = np.array([position[0], position[1], z]) + out * shift + aside * across
+            opening = min(GRIPPER_OPEN, width / 2 + abs(aside) + 0.025)
+            grasps.append(Grasp(centre, np.column_stack([x, y, np.cross(x, y)]), opening, kind, SHELF_APPROACH))
     return grasps
+
+
+def palm_aside(pitch: float, grip_z: float, footprints: list[tuple[np.ndarray, float]], position: np.ndarray,
+               out: np.ndarray, across: np.ndarray, width: float, limit: float) -> tuple[float, float] | None:
+    """(aside, shift) m for a pitched grasp (see `_pitched_grasps`) whose palm, centred on the object, must stand
+    further out than `limit` m in front of it (a neighbour in front and to one side overlaps the 18 cm palm's
+    band): the least move `aside` along `across` (shape (3,), the finger travel) that brings the palm's `shift`
+    (see `palm_shift`; `footprints` the object's own and its neighbours') within `limit`, no further than the
+    open near finger still passes OFFSET_MARGIN beside the object `width` m across (closing, it slides the
+    object to the middle, as `offset_grasps`); None if no such move."""
+    reach = GRIPPER_OPEN - width / 2 - OFFSET_MARGIN
+    for aside in sorted(np.linspace(-reach, reach, 17), key=abs) if reach > 0.0 else []:
+        shift = palm_shift(pitch, grip_z, palm_blockers(footprints, position + aside * across, out, across))
+        if shift <= limit:
+            return float(aside), shift
+    return None
 
 
 def _along_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,

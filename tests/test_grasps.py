@@ -26,6 +26,7 @@ from planners.grasps import (
     footprint,
     handle_grasps,
     offset_grasps,
+    palm_aside,
     palm_blockers,
     palm_gap,
     palm_shift,
@@ -270,3 +271,26 @@ def test_a_ball_is_taken_front_to_back_before_across_pitched() -> None:
     along = [k for k in kinds if k.endswith("-along")]
     across = [k for k in kinds if k.startswith("shelf-") and not k.endswith("-along")]
     assert along and across and kinds.index(along[-1]) < kinds.index(across[0])
+
+
+def test_a_pitched_grasp_moves_aside_off_a_neighbour_in_front_at_the_palm_edge() -> None:
+    """The butter behind the milk's corner (as in the fridge): centred, the 18 cm palm must stand in front of the
+    milk, where the pads hold only the butter's front edge; moved along the front away from it, the palm's band
+    misses the milk and the pads close on the butter, the near finger OFFSET_MARGIN beside it."""
+    butter, milk = CATALOG["food_butter"], CATALOG["milk"]  # 11 x 7 x 4 cm; 7 cm square, 20 cm tall
+    position = np.array([0.0, 0.0, 0.47])
+    neighbour = (footprint(milk, np.array([0.04, 0.113, 0.55]), _yawed(0.0)), 0.65)  # 4 cm out, 11 cm aside
+    quat = _yawed(0.0)  # 11 cm deep, 7 cm along the front
+    grasps = [g for g in shelf_grasps(butter, position, quat, OUT, 0.1, [neighbour]) if g.kind.startswith("shelf-")]
+    aside = [g for g in grasps if g.kind.endswith("-aside")]
+    assert [g.kind for g in aside] == ["shelf-30-aside", "shelf-45-aside", "shelf-60-aside"]
+    for g in aside:
+        moved = g.position[1]  # OUT is +x: along the front is y; away from the milk
+        assert moved < -0.005
+        assert g.pre_opening <= GRIPPER_OPEN
+        assert g.pre_opening - abs(moved) >= 0.07 / 2 + OFFSET_MARGIN - 1e-9  # the near finger passes beside it
+        assert g.position[0] <= 0.11 / 2 - 0.015 / 2 + 1e-9  # the pads on the butter, not its front edge
+    out, across = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+    # nothing in the way: no move; nowhere to go: None
+    assert palm_aside(math.radians(30), 0.478, [], position, out, across, 0.11, 0.02)[0] == 0.0
+    assert palm_aside(math.radians(30), 0.478, [neighbour], position, out, across, 0.16, 0.0) is None
