@@ -59,6 +59,8 @@ POT_HANDLE_FACING = math.radians(60.0)  # rad: a pot's side handle is taken from
 POT_HANDLE_GAP = 0.003  # m between the pads' inner ends and the pot's wall
 POT_HANDLE_MARGIN = 0.015  # m per finger between an open pad and the handle plate
 POT_HANDLE_PITCHES = (math.radians(30.0), math.radians(45.0), math.radians(60.0))  # rad below the horizontal
+DISTURBED_MOVE = 0.005  # m an object must have moved for a failed grasp to count as having shoved it
+DISTURBED_TURN = math.radians(3.0)  # rad: the same for a turn about the vertical
 HANG_RISE = 0.15  # m a hung object's centre is to end above where it stood (its drop as it swings added)
 
 
@@ -335,6 +337,15 @@ def palm_aside(pitch: float, grip_z: float, footprints: list[tuple[np.ndarray, f
         if shift <= limit:
             return float(aside), shift
     return None
+
+
+def disturbed(position: np.ndarray, quat: np.ndarray, now: np.ndarray, quat_now: np.ndarray) -> bool:
+    """Whether an object that stood at `position` (m) turned `quat` (wxyz) and now stands at `now` turned
+    `quat_now` has moved more than DISTURBED_MOVE or turned more than DISTURBED_TURN about the vertical: grasps
+    planned for where it stood would pinch it off centre (a failed side grasp turns a box between the pads)."""
+    turn = 2.0 * (math.atan2(quat_now[3], quat_now[0]) - math.atan2(quat[3], quat[0]))
+    turn = abs(math.remainder(turn, 2.0 * math.pi))
+    return bool(np.linalg.norm(np.asarray(now) - np.asarray(position)) > DISTURBED_MOVE or turn > DISTURBED_TURN)
 
 
 def _along_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,

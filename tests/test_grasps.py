@@ -23,6 +23,7 @@ from planners.grasps import (
     TOP_NARROW_MARGIN,
     along_offset,
     along_span,
+    disturbed,
     footprint,
     handle_grasps,
     offset_grasps,
@@ -294,3 +295,11 @@ def test_a_pitched_grasp_moves_aside_off_a_neighbour_in_front_at_the_palm_edge()
     # nothing in the way: no move; nowhere to go: None
     assert palm_aside(math.radians(30), 0.478, [], position, out, across, 0.11, 0.02)[0] == 0.0
     assert palm_aside(math.radians(30), 0.478, [neighbour], position, out, across, 0.16, 0.0) is None
+
+
+def test_an_object_shoved_or_turned_by_a_failed_grasp_counts_as_disturbed() -> None:
+    here = np.array([0.4, 0.65, 0.475])
+    assert not disturbed(here, _yawed(69.0), here + [0.003, 0.0, 0.0], _yawed(70.0))  # settling: 3 mm, 1 degree
+    assert disturbed(here, _yawed(69.0), here + [0.007, -0.017, 0.0], _yawed(69.0))  # shoved 1.8 cm
+    assert disturbed(here, _yawed(69.0), here, _yawed(62.0))  # turned 7 degrees
+    assert disturbed(here, _yawed(178.0), here, _yawed(-178.0))  # 4 degrees across the half turn
