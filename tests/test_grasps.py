@@ -67,13 +67,32 @@ def test_a_turned_box_gets_grasps_square_to_its_own_faces() -> None:
     position = np.array([0.0, 0.0, veg.size[2] / 2])
     grasps = shelf_grasps(veg, position, _yawed(30.0), OUT, front=0.2)
     faced = [g for g in grasps if g.kind.endswith("-faced")]
-    # across the front nothing fits; only front to back, last ("-along", the pads in the approach's plane)
-    assert faced and not [g for g in grasps if not g.kind.endswith(("-faced", "-along"))]
+    # across the front nothing fits; only front to back, last ("-along", the pads in the approach's plane), and
+    # side grasps halfway to the face (see the next test)
+    assert faced and not [g for g in grasps if not g.kind.endswith(("-faced", "-along", "-halfway"))]
     for grasp in faced:  # the fingers close along one of the object's own axes
         finger = grasp.rotation[:, 1]
         assert min(abs(math.degrees(math.atan2(finger[1], finger[0])) - a) for a in (30, 120, -60, -150)) < 1e-6
     assert shelf_grasps(veg, position, _yawed(0.0), OUT, front=0.2) != []  # square already: no "-faced" copies
     assert not [g for g in shelf_grasps(veg, position, _yawed(0.0), OUT, 0.2) if g.kind.endswith("-faced")]
+
+
+def test_a_box_turned_past_eight_degrees_also_gets_side_grasps_halfway_to_its_face() -> None:
+    """The rice (16 x 6 cm, long side front to back) turned 18 degrees: after those square to its face, side
+    grasps approached 9 degrees off the front, the pads past the front plane no further than square ones."""
+    rice = CATALOG["food_rice"]
+    position = np.array([0.0, 0.0, rice.size[2] / 2])
+    grasps = shelf_grasps(rice, position, _yawed(18.0), OUT, front=0.12)
+    kinds = [g.kind for g in grasps]
+    halfway = [g for g in grasps if g.kind.endswith("-halfway")]
+    assert [g.kind for g in halfway] == ["side-halfway", "side-high-halfway"]
+    assert max(kinds.index(g.kind) for g in grasps if g.kind.endswith("-faced")) < kinds.index("side-halfway")
+    for grasp in halfway:
+        x = grasp.rotation[:, 0]
+        assert math.degrees(math.atan2(-x[1], -x[0])) == pytest.approx(9.0)
+        assert (grasp.position[:2] @ -x[:2]) <= 0.12 / math.cos(math.radians(9.0)) - 0.027 + 1e-9
+        assert grasp.pre_opening <= GRIPPER_OPEN
+    assert not [g for g in shelf_grasps(rice, position, _yawed(5.0), OUT, 0.12) if g.kind.endswith("-halfway")]
 
 
 def test_grasps_from_above_open_wide_then_narrow_and_stop_above_the_support() -> None:
