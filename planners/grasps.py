@@ -62,6 +62,8 @@ POT_HANDLE_PITCHES = (math.radians(30.0), math.radians(45.0), math.radians(60.0)
 ROLL = math.radians(40.0)  # rad a straight-down shelf grasp closing front to back leans sideways ("-rolled"): the
 # wrist, 0.29 m up the grip x, comes 0.29 (1 - cos ROLL) m lower, under a low shelf above a flat object
 ROLL_TIP_CLEARANCE = 0.005  # m the open fingertips of a "-rolled" grasp pass over the object's top on the way in
+DISTURBED_MOVE = 0.005  # m an object must have moved for a failed grasp to count as having shoved it
+DISTURBED_TURN = math.radians(3.0)  # rad: the same for a turn about the vertical
 HANG_RISE = 0.15  # m a hung object's centre is to end above where it stood (its drop as it swings added)
 
 
@@ -293,6 +295,8 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
                                                                                           -np.inf)
         faced = [replace(g, kind=f"{g.kind}-faced") for g in faced + _pitched_grasps(cls, position, quat, face,
                                                                                        neighbours)]
+        if turn_cos < math.cos(FACE_FIRST_TURN):
+            faced += _halfway_sides(cls, position, quat, out, face, front)
         grasps = faced + grasps if turn_cos < math.cos(FACE_FIRST_TURN) else grasps + faced
     rolled = [r for g in grasps if g.kind.startswith("shelf-90") and abs(g.rotation[:2, 1] @ out[:2]) >= 0.5
               for r in rolled_grasps(g, position[2] - sz / 2, position[2] + sz / 2)]
@@ -324,6 +328,19 @@ def _axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
     return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k @ k
 
 
+def _halfway_sides(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, out: np.ndarray, face: np.ndarray,
+                   front: float) -> list[Grasp]:
+    """Side grasps ("-halfway") of a box turned past FACE_FIRST_TURN approached halfway between the furniture's
+    front normal `out` and the box's face normal `face` (each shape (3,)); `front` as for `side_grasps`. Where
+    no base pose reaches the grasp square to the face, one square to the front pinches only the front corner,
+    a wedge that turns the box between the pads (the rice, turned 18 degrees in a crowded cupboard); halfway,
+    the pads meet its faces at half the turn."""
+    mid = (out + face) / np.linalg.norm(out + face)
+    turn_cos = float(mid @ out)
+    grasps = side_grasps(cls, position, quat, mid, front / turn_cos) or side_grasps(cls, position, quat, mid, -np.inf)
+    return [replace(g, kind=f"{g.kind}-halfway") for g in grasps]
+
+
 def _pitched_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,
                     neighbours: list[tuple[np.ndarray, float]] = ()) -> list[Grasp]:
     """Grasps approached SHELF_PITCHES down against `outward` (shape (3,)), the fingers closing horizontally
@@ -345,12 +362,43 @@ def _pitched_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, ou
             z = max(top - TOP_DEPTH, support + tip_drop + SUPPORT_CLEARANCE)
             depth = _extent(out, cls, yaw)
             shift = 0.0 if pitch == SHELF_PITCHES[-1] else palm_shift(pitch, z, blockers)
-            if shift > depth / 2 - SIDE_MIN_OVERLAP / 2:
-                continue  # the pads would hold only the front edge
-            centre = np.array([position[0], position[1], z]) + out * shift
-            grasps.append(Grasp(centre, np.column_stack([x, y, np.cross(x, y)]), min(GRIPPER_OPEN, width / 2 + 0.025),
-                                f"shelf-{math.degrees(pitch):.0f}", SHELF_APPROACH))
+            aside, kind = 0.0, f"shelf-{math.degrees(pitch):.0f}"
+            if shift > depth / 2 - SIDE_MIN_OVERLAP / 2:  # the pads would hold only the front edge
+                moved = palm_aside(pitch, z, [own, *neighbours], position, out, across, width,
+                                   depth / 2 - SIDE_MIN_OVERLAP / 2)
+                if moved is None:
+                    continue
+                aside, shift = moved
+                kind += "-aside"
+            centre = np.array([position[0], position[1], z]) + out * shift + aside * across
+            opening = min(GRIPPER_OPEN, width / 2 + abs(aside) + 0.025)
+            grasps.append(Grasp(centre, np.column_stack([x, y, np.cross(x, y)]), opening, kind, SHELF_APPROACH))
     return grasps
+
+
+def palm_aside(pitch: float, grip_z: float, footprints: list[tuple[np.ndarray, float]], position: np.ndarray,
+               out: np.ndarray, across: np.ndarray, width: float, limit: float) -> tuple[float, float] | None:
+    """(aside, shift) m for a pitched grasp (see `_pitched_grasps`) whose palm, centred on the object, must stand
+    further out than `limit` m in front of it (a neighbour in front and to one side overlaps the 18 cm palm's
+    band): the least move `aside` along `across` (shape (3,), the finger travel) that brings the palm's `shift`
+    (see `palm_shift`; `footprints` the object's own and its neighbours') within `limit`, no further than the
+    open near finger still passes OFFSET_MARGIN beside the object `width` m across (closing, it slides the
+    object to the middle, as `offset_grasps`); None if no such move."""
+    reach = GRIPPER_OPEN - width / 2 - OFFSET_MARGIN
+    for aside in sorted(np.linspace(-reach, reach, 17), key=abs) if reach > 0.0 else []:
+        shift = palm_shift(pitch, grip_z, palm_blockers(footprints, position + aside * across, out, across))
+        if shift <= limit:
+            return float(aside), shift
+    return None
+
+
+def disturbed(position: np.ndarray, quat: np.ndarray, now: np.ndarray, quat_now: np.ndarray) -> bool:
+    """Whether an object that stood at `position` (m) turned `quat` (wxyz) and now stands at `now` turned
+    `quat_now` has moved more than DISTURBED_MOVE or turned more than DISTURBED_TURN about the vertical: grasps
+    planned for where it stood would pinch it off centre (a failed side grasp turns a box between the pads)."""
+    turn = 2.0 * (math.atan2(quat_now[3], quat_now[0]) - math.atan2(quat[3], quat[0]))
+    turn = abs(math.remainder(turn, 2.0 * math.pi))
+    return bool(np.linalg.norm(np.asarray(now) - np.asarray(position)) > DISTURBED_MOVE or turn > DISTURBED_TURN)
 
 
 def _along_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray,

@@ -22,6 +22,7 @@ from planners.control import CARRY_MOTION, FREE_MOTION, Controller
 from planners.door_skills import ARC_BASE_COST, ClearanceCheck, Held, PartMover
 from planners.grasps import (
     Grasp,
+    disturbed,
     hang_rotation,
     matrix_to_quat,
     offset_grasps,
@@ -417,12 +418,13 @@ class Robot:
         return not at_grasp.converged or self.clearance.fingers_clear(q)
 
     def _pick_from_shelf(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
-                         out: np.ndarray | None = None) -> SkillResult:
+                         out: np.ndarray | None = None, replan: bool = True) -> SkillResult:
         """Pick `name` from a shelf inside cabinet `node`: each grasp of `shelf_grasps` in turn, from a base
         pose where the arm clears the compartment; the object lifted SIDE_LIFT m, drawn out, then raised.
         With `out` (a horizontal unit vector, shape (2,)), from an open top instead, for a shelf next: the grasps a
         shelf takes (side grasps, the fingers as deep on the object as they reach, then pitched ones), approached
-        against `out`."""
+        against `out`. With `replan`, once a failed grasp has moved the object (see `disturbed`), the grasps are
+        planned again for where it now stands (the others were for where it stood)."""
         furniture = self.navigator.furniture[node]
         if out is None:
             out = self.navigator.front_normal(node)
@@ -456,6 +458,10 @@ class Robot:
                 self.held = name
                 return outcome
             failures.append(f"{grasp.kind}: {outcome.reason}")
+            now = self.world.object_pose(name)
+            if replan and disturbed(position, quat, *now) and not self._fallen_over(name):
+                again = self._pick_from_shelf(name, node, cls, *now, out, replan=False)
+                return again if again.success else SkillResult(False, f"{again.reason} (moved by {failures})")
         if unreachable:
             failures.append(f"{', '.join(unreachable)}: no free base pose reaches the grasp without the arm "
                             f"touching {node} or its contents")

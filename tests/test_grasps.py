@@ -25,9 +25,11 @@ from planners.grasps import (
     TOP_NARROW_MARGIN,
     along_offset,
     along_span,
+    disturbed,
     footprint,
     handle_grasps,
     offset_grasps,
+    palm_aside,
     palm_blockers,
     palm_gap,
     palm_shift,
@@ -69,13 +71,32 @@ def test_a_turned_box_gets_grasps_square_to_its_own_faces() -> None:
     position = np.array([0.0, 0.0, veg.size[2] / 2])
     grasps = shelf_grasps(veg, position, _yawed(30.0), OUT, front=0.2)
     faced = [g for g in grasps if g.kind.endswith("-faced")]
-    # across the front nothing fits; only front to back, last ("-along", the pads in the approach's plane)
-    assert faced and not [g for g in grasps if not g.kind.endswith(("-faced", "-along"))]
+    # across the front nothing fits; only front to back, last ("-along", the pads in the approach's plane), and
+    # side grasps halfway to the face (see the next test)
+    assert faced and not [g for g in grasps if not g.kind.endswith(("-faced", "-along", "-halfway"))]
     for grasp in faced:  # the fingers close along one of the object's own axes
         finger = grasp.rotation[:, 1]
         assert min(abs(math.degrees(math.atan2(finger[1], finger[0])) - a) for a in (30, 120, -60, -150)) < 1e-6
     assert shelf_grasps(veg, position, _yawed(0.0), OUT, front=0.2) != []  # square already: no "-faced" copies
     assert not [g for g in shelf_grasps(veg, position, _yawed(0.0), OUT, 0.2) if g.kind.endswith("-faced")]
+
+
+def test_a_box_turned_past_eight_degrees_also_gets_side_grasps_halfway_to_its_face() -> None:
+    """The rice (16 x 6 cm, long side front to back) turned 18 degrees: after those square to its face, side
+    grasps approached 9 degrees off the front, the pads past the front plane no further than square ones."""
+    rice = CATALOG["food_rice"]
+    position = np.array([0.0, 0.0, rice.size[2] / 2])
+    grasps = shelf_grasps(rice, position, _yawed(18.0), OUT, front=0.12)
+    kinds = [g.kind for g in grasps]
+    halfway = [g for g in grasps if g.kind.endswith("-halfway")]
+    assert [g.kind for g in halfway] == ["side-halfway", "side-high-halfway"]
+    assert max(kinds.index(g.kind) for g in grasps if g.kind.endswith("-faced")) < kinds.index("side-halfway")
+    for grasp in halfway:
+        x = grasp.rotation[:, 0]
+        assert math.degrees(math.atan2(-x[1], -x[0])) == pytest.approx(9.0)
+        assert (grasp.position[:2] @ -x[:2]) <= 0.12 / math.cos(math.radians(9.0)) - 0.027 + 1e-9
+        assert grasp.pre_opening <= GRIPPER_OPEN
+    assert not [g for g in shelf_grasps(rice, position, _yawed(5.0), OUT, 0.12) if g.kind.endswith("-halfway")]
 
 
 def test_grasps_from_above_open_wide_then_narrow_and_stop_above_the_support() -> None:
@@ -306,3 +327,34 @@ def test_a_ball_is_taken_front_to_back_before_across_pitched() -> None:
     along = [k for k in kinds if k.endswith("-along")]
     across = [k for k in kinds if k.startswith("shelf-") and not k.endswith("-along")]
     assert along and across and kinds.index(along[-1]) < kinds.index(across[0])
+
+
+def test_a_pitched_grasp_moves_aside_off_a_neighbour_in_front_at_the_palm_edge() -> None:
+    """The butter behind the milk's corner (as in the fridge): centred, the 18 cm palm must stand in front of the
+    milk, where the pads hold only the butter's front edge; moved along the front away from it, the palm's band
+    misses the milk and the pads close on the butter, the near finger OFFSET_MARGIN beside it."""
+    butter, milk = CATALOG["food_butter"], CATALOG["milk"]  # 11 x 7 x 4 cm; 7 cm square, 20 cm tall
+    position = np.array([0.0, 0.0, 0.47])
+    neighbour = (footprint(milk, np.array([0.04, 0.113, 0.55]), _yawed(0.0)), 0.65)  # 4 cm out, 11 cm aside
+    quat = _yawed(0.0)  # 11 cm deep, 7 cm along the front
+    grasps = [g for g in shelf_grasps(butter, position, quat, OUT, 0.1, [neighbour]) if g.kind.startswith("shelf-")]
+    aside = [g for g in grasps if g.kind.endswith("-aside")]
+    assert [g.kind for g in aside] == ["shelf-30-aside", "shelf-45-aside", "shelf-60-aside"]
+    for g in aside:
+        moved = g.position[1]  # OUT is +x: along the front is y; away from the milk
+        assert moved < -0.005
+        assert g.pre_opening <= GRIPPER_OPEN
+        assert g.pre_opening - abs(moved) >= 0.07 / 2 + OFFSET_MARGIN - 1e-9  # the near finger passes beside it
+        assert g.position[0] <= 0.11 / 2 - 0.015 / 2 + 1e-9  # the pads on the butter, not its front edge
+    out, across = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+    # nothing in the way: no move; nowhere to go: None
+    assert palm_aside(math.radians(30), 0.478, [], position, out, across, 0.11, 0.02)[0] == 0.0
+    assert palm_aside(math.radians(30), 0.478, [neighbour], position, out, across, 0.16, 0.0) is None
+
+
+def test_an_object_shoved_or_turned_by_a_failed_grasp_counts_as_disturbed() -> None:
+    here = np.array([0.4, 0.65, 0.475])
+    assert not disturbed(here, _yawed(69.0), here + [0.003, 0.0, 0.0], _yawed(70.0))  # settling: 3 mm, 1 degree
+    assert disturbed(here, _yawed(69.0), here + [0.007, -0.017, 0.0], _yawed(69.0))  # shoved 1.8 cm
+    assert disturbed(here, _yawed(69.0), here, _yawed(62.0))  # turned 7 degrees
+    assert disturbed(here, _yawed(178.0), here, _yawed(-178.0))  # 4 degrees across the half turn
