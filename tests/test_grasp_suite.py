@@ -58,8 +58,8 @@ def test_summary_counts_trials_and_rates() -> None:
     assert summary["worst_class_rate"] == 0.5 and not summary["meets_targets"]
 
 
-QUICK_MIN_OVERALL = 0.74  # regression floor: 9 of 12 measured (the apple in the fridge, the cooking pot's rim pinch
-# and the cd in its drawer still fail; the slow full-suite test asserts the targets)
+QUICK_MIN_OVERALL = 0.9  # regression floor: 12 of 12 measured; one failure allowed for float differences between
+# machines (the slow full-suite test asserts the targets)
 
 
 def test_quick_subset_lifts_and_holds(tmp_path: Path) -> None:
