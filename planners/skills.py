@@ -18,23 +18,15 @@ from homer_sim.placement import place_world
 from homer_sim.spots import Spots
 from homer_sim.validate import ROBOT_RADIUS
 from planners.articulate import base_candidates, drawer_rim
+from planners.container_grasps import hang_rotation
 from planners.control import CARRY_MOTION, FREE_MOTION, Controller
 from planners.door_skills import ARC_BASE_COST, ClearanceCheck, Held, PartMover
-from planners.grasps import (
-    Grasp,
-    disturbed,
-    hang_rotation,
-    matrix_to_quat,
-    offset_grasps,
-    rim_approach,
-    shelf_grasps,
-    slerp,
-    top_grasps,
-    ungraspable_reason,
-)
+from planners.grasps import Grasp, disturbed, matrix_to_quat, slerp, ungraspable_reason
 from planners.ik import IKSolver
 from planners.navigation import CLEARANCE, NavigationError, Navigator
 from planners.neighbours import neighbour_footprints
+from planners.shelf_grasps import shelf_grasps
+from planners.top_grasps import offset_grasps, rim_approach, top_grasps
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 LIFT = 0.15  # m
