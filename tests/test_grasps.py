@@ -9,36 +9,36 @@ import numpy as np
 import pytest
 
 from homer_sim.catalog import CATALOG
+from planners.container_grasps import handle_grasps
 from planners.grasps import (
     FINGER_HALF_THICKNESS,
     GRIPPER_OPEN,
     MAX_WIDTH,
     OFFSET_MARGIN,
     PAD_HALF,
-    PALM_MARGIN,
-    ROLL,
-    ROLL_TIP_CLEARANCE,
-    ROUND_PAST,
     SHELF_APPROACH,
     SUPPORT_CLEARANCE,
     TOP_MARGIN,
     TOP_NARROW_MARGIN,
-    along_offset,
-    along_span,
     disturbed,
     footprint,
-    handle_grasps,
-    offset_grasps,
+)
+from planners.shelf_grasps import (
+    PALM_MARGIN,
+    ROLL,
+    ROLL_TIP_CLEARANCE,
+    ROUND_PAST,
+    along_offset,
+    along_span,
     palm_aside,
     palm_blockers,
     palm_gap,
     palm_shift,
-    rim_approach,
     rolled_grasps,
     shelf_grasps,
     side_grasps,
-    top_grasps,
 )
+from planners.top_grasps import offset_grasps, rim_approach, top_grasps
 
 OUT = np.array([1.0, 0.0])  # out of the furniture's front, towards the robot
 
@@ -216,7 +216,7 @@ def test_a_box_turned_past_eight_degrees_is_taken_square_to_its_face_first() -> 
 
 def test_a_bin_is_pinched_deep_at_its_far_rim_lifted_clear_and_hung() -> None:
     from homer_sim.shapes import cavity
-    from planners.grasps import HANG_RISE, RIM_CLEARANCE, RIM_DEEP
+    from planners.container_grasps import HANG_RISE, RIM_CLEARANCE, RIM_DEEP
 
     cls = CATALOG["basket_for_clothes"]  # 44 x 44 x 32 cm, straight walls
     sz = cls.size[2]
@@ -239,7 +239,8 @@ def test_a_bin_is_pinched_deep_at_its_far_rim_lifted_clear_and_hung() -> None:
 
 
 def test_hanging_turns_the_hand_until_the_load_is_straight_below() -> None:
-    from planners.grasps import hang_rotation, top_rotation
+    from planners.container_grasps import hang_rotation
+    from planners.grasps import top_rotation
 
     rotation = top_rotation(0.0)  # pointing down, fingers along x, z along -y
     grip = np.array([0.2, 0.0, 0.5])
@@ -253,7 +254,7 @@ def test_hanging_turns_the_hand_until_the_load_is_straight_below() -> None:
 
 def test_a_pot_on_a_shelf_is_taken_by_the_handle_facing_the_front_short_of_its_wall() -> None:
     from homer_sim.shapes import WALL_THICKNESS, handle_boxes
-    from planners.grasps import POT_HANDLE_GAP, pot_handle_grasps
+    from planners.container_grasps import POT_HANDLE_GAP, pot_handle_grasps
 
     cls = CATALOG["cookingpot"]  # handles on body -x and +x
     position = np.array([0.0, 0.0, cls.size[2] / 2])

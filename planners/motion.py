@@ -1,0 +1,342 @@
+"""The robot's movement primitives, mixed into `planners.skills.Robot`, and `SkillResult`, what every skill returns.
+
+`Motion` owns how the robot moves: IK onto grip-site poses, straight grip-site lines, the tuck and the raised
+arm, joint-space swings checked for clearance, driving to furniture (with or without a held object) or to a base
+pose from which the way into a grasp is clear, the carry path; and what the hand holds (where an object sits in
+it, whether it is empty, whether an object has fallen over). The skills built on it are in `planners.pick`,
+`planners.place` and `planners.door_skills`; constants `planners.pick` and `planners.place` share live here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from homer_sim.catalog import CATALOG
+from homer_sim.validate import ROBOT_RADIUS
+from planners.articulate import base_candidates
+from planners.control import CARRY_MOTION, FREE_MOTION
+from planners.door_skills import ARC_BASE_COST, Held
+from planners.grasps import Grasp, matrix_to_quat, slerp
+from planners.navigation import CLEARANCE
+
+MIN_HELD_OPENING = 0.001  # m per finger: closed further means the fingers missed
+GRASP_BASE_COST = 100.0  # IK damping on the base while grasping
+RAISED_TORSO = 0.3  # m
+CARRY_REACH = 0.35  # m from the base centre
+CARRY_HEIGHT = 1.05  # m
+CARRY_STEP = 0.05  # m between IK waypoints on the way to the carry point
+TURN_STEP = 0.15  # rad the hand turns at most between IK waypoints of a move between poses
+RAISED_SHOULDER = -1.0  # rad: upper arm raised above the tuck
+SIDE_LIFT = 0.03  # m: a side grasp first lifts the object this much off its shelf,
+ENTRY_OUT = 0.12  # m: a grasp inside furniture is entered from this far in front of its front plane
+ENTRY_STEP = 0.05  # m between checked configurations on the way in
+PASS_OVER = 0.03  # m between a carried object and a surface it is carried over before it is put down
+PULL_BASE_COST = 0.1  # IK damping on the base while drawing an object out: the base backs away
+LEAD_HEIGHTS = (0.15, 0.3)  # m above a grasp's entry point the arm may first swing to, then come down
+SWING_STEP = 0.02  # rad between checked configurations of a joint-space swing (a fingertip 0.9 m out moves
+# under 2 cm: it cannot pass through a drawer front unseen)
+UPRIGHT = 0.7  # z component of an object's up axis below which a put-down object has fallen over
+PITCHED_HAND = 0.25  # horizontal part of the grip x axis above which the hand does not count as pointing down
+WAYPOINT_TOL = (0.015, np.deg2rad(5.0))  # m, rad: IK tolerance of a straight line's intermediate points (the end
+# point is exact); tight ones stall near joint limits on the way
+
+
+@dataclass(frozen=True)
+class SkillResult:
+    """success, and when not, why (names the object, the place and the measured values)."""
+
+    success: bool
+    reason: str = ""
+
+
+class Motion:
+    """The movement primitives of `planners.skills.Robot` and what its hand holds; the state they use (world, ik,
+    controller, navigator, clearance, tuck, held, folded, shoulder_lift) is the Robot's (see `Robot.__init__`)."""
+
+    def _ik(self, position: np.ndarray, rotation_quat: np.ndarray, seeds: bool = True):
+        return self.ik.solve(self.controller.target, position, rotation_quat, base_cost=GRASP_BASE_COST,
+                             seeds=seeds)
+
+    def _line(self, start: np.ndarray, end: np.ndarray, quat: np.ndarray, steps: int = 4,
+              base_cost: float = GRASP_BASE_COST, loose_end: bool = False,
+              partial: bool = False, seed: np.ndarray | None = None,
+              from_quat: np.ndarray | None = None, close: bool = False) -> list[np.ndarray] | None:
+        """IK configurations along the straight grip-site line start -> end (m), or None if any is unreachable
+        (with `partial`, those up to the last reachable point instead); base_cost: IK damping on the base (low
+        lets the base back away, e.g. drawing an object off a shelf). Points before the end are solved within
+        WAYPOINT_TOL, the end exactly unless `loose_end`. seed: the configuration at `start` (default: the
+        controller's target). from_quat: the orientation at `start`, turned evenly into `quat` on the way (default:
+        `quat` all along). close: points before the end are first tried exactly, WAYPOINT_TOL only where that
+        fails (onto a grasp: each loose point seeds the next, and the line drifts up to 15 mm aside, into the
+        object between the open fingers)."""
+        q = (self.controller.target if seed is None else seed).copy()
+        path = []
+        for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
+            loose = {} if s == 1.0 and not loose_end else {"position_tol": WAYPOINT_TOL[0],
+                                                            "orientation_tol": WAYPOINT_TOL[1]}
+            turned = quat if from_quat is None else slerp(from_quat, quat, s)
+            result = self.ik.solve(q, start + s * (end - start), turned, base_cost=base_cost, seeds=False,
+                                   **({} if close else loose))
+            if close and loose and not result.converged:
+                result = self.ik.solve(q, start + s * (end - start), turned, base_cost=base_cost, seeds=False, **loose)
+            if not result.converged:
+                return path if partial else None
+            q = result.q
+            path.append(q)
+        return path
+
+    def raised(self, torso: float) -> np.ndarray:
+        """The tuck posture with the upper arm raised and the torso at `torso` m, at the current base pose: the
+        waypoint between tuck and any reach, so the folded arm never sweeps through a counter."""
+        q = self.tuck.copy()
+        q[:3] = self.controller.target[:3]
+        q[3] = max(torso, RAISED_TORSO)
+        q[self.shoulder_lift] = RAISED_SHOULDER
+        return q
+
+    def reach(self, q_goal: np.ndarray, grip: float | None = None) -> None:
+        """Move to configuration q_goal (shape (13,)); from the tuck posture straight there if that swing touches
+        nothing, else through `raised`, quicker (the hand is empty)."""
+        if self.folded:
+            via = [] if self._swing_clear(self.controller.target, q_goal) else [self.raised(q_goal[3])]
+            self.controller.move_through([*via, q_goal], grip=grip, **FREE_MOTION)
+        else:
+            self.controller.move_through([q_goal], grip=grip)
+        self.folded = False
+
+    def retract(self) -> None:
+        """Tuck the arm in place (the base and the torso stay): with an empty hand straight there if that swing
+        touches nothing, quicker; else through `raised`."""
+        if not self.folded:
+            tucked = self.tucked()
+            if self.held is None and self._swing_clear(self.controller.target, tucked):
+                self.controller.move_through([tucked], **FREE_MOTION)
+            else:
+                self.controller.move_through([self.raised(self.controller.target[3]), tucked])
+        self.folded = True
+
+    def tucked(self) -> np.ndarray:
+        """The tuck posture at the current base pose and torso height (at least the tuck's): the torso is the
+        slowest joint (0.1 m/s), so it stays up between skills instead of going down and up again."""
+        q = self.tuck.copy()
+        q[:3] = self.controller.target[:3]
+        q[3] = max(float(self.controller.target[3]), float(self.tuck[3]))
+        return q
+
+    def go_to(self, node: str, target_xy: np.ndarray, surface_z: float | None = None) -> bool:
+        """Drive to a free base pose in front of furniture `node`, facing `target_xy`: with the arm tucked, or
+        while holding an object with the grip site CARRY_REACH m in front of the base at CARRY_HEIGHT m. A held
+        object keeps clear of open doors, and, if it hangs lower than PASS_OVER above `surface_z` (m, the surface
+        it is for), of the furniture itself: then the robot stops short and returns True."""
+        if self.folded:
+            posture = self.tucked()
+        else:
+            path = self._carry_path()
+            self.controller.move_through(path)
+            posture = path[-1]
+        reach, short = 0.0, False
+        if self.held is not None:  # the held object sticks out past the base
+            size = CATALOG[self.world.layout.objects[self.world.object_index(self.held)].cls].size
+            body = self.world.object_body_ids[self.world.object_index(self.held)]
+            position = self.world.object_pose(self.held)[0]
+            half_height = float(np.abs(self.world.data.xmat[body].reshape(3, 3)[2]) @ np.asarray(size) / 2)
+            reach = self._held_reach()
+            short = surface_z is not None and position[2] - half_height < surface_z + PASS_OVER
+            if short:  # the straight carry line stalled low: one IK solution lifts it clear, if there is one
+                grip = self.world.data.site("robot/grip").xpos
+                lift = surface_z + PASS_OVER + half_height - position[2]
+                higher = self._ik(grip + np.array([0.0, 0.0, lift + 0.02]), self._held_quat())
+                if higher.converged:
+                    self.controller.move_through([higher.q])
+                    posture = higher.q
+                    position = self.world.object_pose(self.held)[0]
+                    short = position[2] - half_height < surface_z + PASS_OVER
+        self.navigator.drive_to(self.navigator.stand_pose(node, tuple(target_xy), reach if short else 0.0), posture,
+                                reach, **(FREE_MOTION if self.held is None else CARRY_MOTION))
+        return short
+
+    def _go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float, here_first: bool = False,
+                     direct: bool = False) -> list[np.ndarray] | None:
+        """Drive (arm tucked) to a free base pose from which the way into `grasp` is reachable with the arm
+        clear of the apartment: the grip `entry` m out along `pull` (a horizontal unit vector out of the
+        furniture, shape (3,)) from the approach point, in along a straight line, the approach, and SIDE_LIFT m
+        above the grasp. Returns the configurations (each shape (13,)) from the entry to the approach point, or
+        None (the robot stays) if no base pose works. With `here_first`, where the robot stands is tried first;
+        with `direct`, the arm may also swing straight from the tuck (see `_way_in`)."""
+        quat = grasp.quat()
+        above = grasp.position - grasp.approach * grasp.rotation[:, 0]
+        obstacles = self.navigator.open_part_rects()
+        here = [tuple(self.controller.target[:3])] if here_first else []
+        for base in [*here, *base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2])]:
+            if base not in here and not self.navigator.plan.disk_is_free(base[0], base[1], ROBOT_RADIUS + CLEARANCE,
+                                                                         obstacles):
+                continue
+            q = self.tuck.copy()
+            q[:3] = base
+            start = self.ik.solve(q, above + entry * pull, quat, base_cost=ARC_BASE_COST)
+            if not start.converged or not self.clearance.clear(start.q):
+                continue
+            path = self._checked_line(start.q, [above + entry * pull, above], quat)
+            if path is None or self._checked_line(path[-1], [above, grasp.position, grasp.position + np.array(
+                    [0.0, 0.0, SIDE_LIFT])], quat) is None:
+                continue
+            lead = self._way_in(base, start.q, above + entry * pull, quat, direct)
+            if lead is None:
+                continue
+            self.retract()
+            self.navigator.drive_to(base, self.tucked(), **FREE_MOTION)
+            path_in = [*lead, *path]
+            for q_in in path_in:
+                q_in[:3] = self.controller.target[:3]  # where the base really stopped
+            return path_in
+        return None
+
+    def _way_in(self, base: np.ndarray, q: np.ndarray, point: np.ndarray, quat: np.ndarray, direct: bool = False
+                ) -> list[np.ndarray] | None:
+        """The way from the tuck at base pose `base` (x m, y m, yaw rad) to configuration q (shape (13,), the grip
+        site at `point`, m, orientation `quat`): unfolded, then `_lead_in`; else, with `direct` (where unfolding
+        touches: close to a tall cupboard or its open door), straight from the tuck to q if that swing is clear
+        (`reach` takes it); None if neither."""
+        if self._unfold_clear(base, q[3]):
+            lead = self._lead_in(q, point, quat)
+            if lead is not None:
+                return lead
+        if not direct:
+            return None
+        tucked = self.tucked()
+        tucked[:3] = base
+        return [q] if self._swing_clear(tucked, q) else None
+
+    def _unfold_clear(self, base: np.ndarray, torso: float) -> bool:
+        """Whether the arm unfolds from the tuck to `raised(torso)` at base pose `base` (x m, y m, yaw rad)
+        without touching anything: next to a table the folded elbow swings out over its top."""
+        tucked, raised = self.tucked(), self.raised(torso)
+        tucked[:3] = raised[:3] = base
+        return self._swing_clear(tucked, raised)
+
+    def _lead_in(self, q: np.ndarray, point: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
+        """The way from the raised arm to configuration q (shape (13,), the grip site at `point`, m): q alone if
+        the joint-space swing there touches nothing, else down onto `point` from a LEAD_HEIGHTS m higher one
+        (the swing passes over what stands on a table); None if neither is clear."""
+        if self._swing_clear(self.raised(q[3]), q):
+            return [q]
+        for height in LEAD_HEIGHTS:
+            high = point + np.array([0.0, 0.0, height])
+            via = self.ik.solve(q, high, quat, base_cost=ARC_BASE_COST, seeds=False)
+            if not via.converged or not self._swing_clear(self.raised(q[3]), via.q):
+                continue
+            down = self._checked_line(via.q, [high, point], quat)
+            if down is not None:
+                return [via.q, *down]
+        return None
+
+    def _swing_clear(self, q_from: np.ndarray, q_to: np.ndarray, held: Held | None = None) -> bool:
+        """Whether the joint-space move q_from -> q_to (each shape (13,), base at q_to's) keeps the arm, the
+        fingers (they swing free) and `held`, an object in the hand, clear, checked every SWING_STEP rad of the
+        largest joint change."""
+        q_from = q_from.copy()
+        q_from[:3] = q_to[:3]
+        steps = max(1, int(np.ceil(np.max(np.abs(q_to[3:11] - q_from[3:11])) / SWING_STEP)))
+        return all(self.clearance.clear(q_from + s * (q_to - q_from), held=held, fingers=True)
+                   for s in np.linspace(0.0, 1.0, steps + 1)[1:])
+
+    def _checked_line(self, q: np.ndarray, points: list[np.ndarray], quat: np.ndarray, held: Held | None = None
+                      ) -> list[np.ndarray] | None:
+        """IK configurations (base held, each shape (13,)) from q through grip-site points (m, each shape (3,)),
+        ENTRY_STEP m apart on the straight lines between them; None if one is unreachable or touches anything
+        (`held`, an object in the hand, included)."""
+        path = []
+        for a, b in zip(points[:-1], points[1:], strict=False):
+            steps = max(1, int(np.ceil(np.linalg.norm(b - a) / ENTRY_STEP)))
+            for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
+                result = self.ik.solve(q, a + s * (b - a), quat, base_cost=ARC_BASE_COST, seeds=False)
+                if not result.converged or not self.clearance.clear(result.q, held=held):
+                    return None
+                q = result.q
+                path.append(q)
+        return path
+
+    def _carry_path(self) -> list[np.ndarray]:
+        """Configurations (each shape (13,)) along a straight grip-site line from where the hand is to the carry
+        point, CARRY_REACH m in front of the base at CARRY_HEIGHT m; a joint-space move there could swing the held
+        object down through the furniture or out of the fingers. A hand pointing behind the base's front (and not
+        down) turns on the way about the vertical to point ahead of it: a later move into a shelf the base faces
+        would swing the object past the base and knock it out of the fingers. Otherwise the orientation is kept.
+        Where the line leaves the arm's reach, the hand stays at the last reachable point."""
+        x, y, yaw = self.controller.target[:3]
+        point = np.array([x + CARRY_REACH * np.cos(yaw), y + CARRY_REACH * np.sin(yaw), CARRY_HEIGHT])
+        rotation = self.world.data.site("robot/grip").xmat.reshape(3, 3)
+        ahead = np.array([np.cos(yaw), np.sin(yaw)])
+        if np.linalg.norm(rotation[:2, 0]) > PITCHED_HAND and rotation[:2, 0] @ ahead < 0.0:  # points back: turn it
+            rotation = _yaw_matrix(yaw - math.atan2(rotation[1, 0], rotation[0, 0])) @ rotation
+        return self._hand_line(point, matrix_to_quat(rotation), GRASP_BASE_COST, partial=True) or [
+            self.controller.target.copy()]
+
+    def _hand_line(self, point: np.ndarray, quat: np.ndarray, base_cost: float, partial: bool = False,
+                   seed: np.ndarray | None = None) -> list[np.ndarray] | None:
+        """`_line` from where the grip site is now (or at configuration `seed`, shape (13,)) to `point` (m) at
+        orientation `quat`, turning the hand evenly on the way: CARRY_STEP m and at most TURN_STEP rad between IK
+        waypoints (at least two), every one within WAYPOINT_TOL: a move between poses, not onto a grasp."""
+        if seed is None:
+            start, now = self.world.data.site("robot/grip").xpos.copy(), self._held_quat()
+        else:
+            start, now = self.ik.grip_pose(seed)
+        turn = 2.0 * math.acos(min(abs(float(np.dot(now, quat))), 1.0))
+        steps = max(2, int(np.ceil(np.linalg.norm(point - start) / CARRY_STEP)), int(np.ceil(turn / TURN_STEP)))
+        return self._line(start, point, quat, steps, base_cost=base_cost, loose_end=True, partial=partial,
+                          seed=seed, from_quat=now)
+
+    def _grip_line(self, point: np.ndarray, quat: np.ndarray) -> bool:
+        """Move the grip site in a straight line to `point` (m), orientation `quat` kept (see `_hand_line`), the
+        base free to follow; False (nothing moved) if the line leaves the arm's reach."""
+        path = self._hand_line(point, quat, PULL_BASE_COST)
+        if path is None:
+            return False
+        self.controller.move_through(path)
+        return True
+
+    # --- the held object ---------------------------------------------------------------------------------
+    def _held_offset(self, name: str) -> np.ndarray:
+        """Where object `name` sits in the grip site's frame (m, shape (3,)): it stays put while the hand turns,
+        so a change of it is slip."""
+        grip = self.world.data.site("robot/grip")
+        return grip.xmat.reshape(3, 3).T @ (self.world.object_pose(name)[0] - grip.xpos)
+
+    def _hand_empty(self) -> bool:
+        """Whether the closed fingers hold nothing (they met each other)."""
+        return float(np.mean(self.controller.q()[-2:])) < MIN_HELD_OPENING
+
+    def _held(self, name: str) -> Held:
+        """Object `name` as it sits in the hand now, for clearance checks of moves that carry it."""
+        model, index = self.world.model, self.world.object_index(name)
+        body = self.world.object_body_ids[index]
+        grip = self.world.data.site("robot/grip")
+        rotation = grip.xmat.reshape(3, 3)
+        return Held(frozenset(np.flatnonzero(model.geom_bodyid == body).tolist()),
+                    int(model.jnt_qposadr[model.body_jntadr[body]]), self._held_offset(name),
+                    rotation.T @ self.world.data.xmat[body].reshape(3, 3))
+
+    def _held_reach(self) -> float:
+        """How far (m) the held object sticks out from the base centre, with CLEARANCE."""
+        index = self.world.object_index(self.held)
+        size = CATALOG[self.world.layout.objects[index].cls].size
+        position = self.world.object_pose(self.held)[0]
+        return float(np.linalg.norm(position[:2] - self.controller.q()[:2]) + np.linalg.norm(size[:2]) / 2
+                     + CLEARANCE)
+
+    def _fallen_over(self, name: str) -> bool:
+        """Whether object `name` no longer stands up (its up axis tilted past UPRIGHT)."""
+        return bool(self.world.data.xmat[self.world.object_body_ids[self.world.object_index(name)]][8] < UPRIGHT)
+
+    def _held_quat(self) -> np.ndarray:
+        """The grip site's current orientation (wxyz), kept while carrying."""
+        return matrix_to_quat(self.world.data.site("robot/grip").xmat.reshape(3, 3))
+
+
+def _yaw_matrix(angle: float) -> np.ndarray:
+    """The rotation (shape (3, 3)) by `angle` rad about the vertical."""
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])

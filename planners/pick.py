@@ -1,0 +1,258 @@
+"""The `pick` skill of `planners.skills.Robot`: grasp an object and lift it, checked in physics.
+
+From above (top grasps, off-centre ones, out of a drawer past its front), or from a cabinet's shelf or under a
+low shelf from the front (shelf grasps, the object lifted, drawn out, then raised); a failed grasp is retried
+from the next candidate. Movement comes from `planners.motion`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from homer_sim.catalog import CATALOG
+from homer_sim.graph import INSIDE, ON, RELATION_NAMES
+from homer_sim.placement import place_world
+from planners.articulate import drawer_rim
+from planners.container_grasps import hang_rotation
+from planners.control import FREE_MOTION
+from planners.grasps import Grasp, disturbed, matrix_to_quat, ungraspable_reason
+from planners.motion import ENTRY_OUT, GRASP_BASE_COST, MIN_HELD_OPENING, PULL_BASE_COST, SIDE_LIFT, SkillResult
+from planners.navigation import NavigationError
+from planners.neighbours import neighbour_footprints
+from planners.shelf_grasps import shelf_grasps
+from planners.top_grasps import offset_grasps, rim_approach, top_grasps
+
+LIFT = 0.15  # m
+DRAWER_CLEARANCE = 0.03  # m an object lifted out of a drawer rises past the top of its front
+HOLD_SECONDS = 0.5
+# a side grasp lifts the object SIDE_LIFT m off its shelf (see planners.motion),
+SIDE_PULL = 0.35  # m: then draws it this far out of the furniture,
+SIDE_RAISE = 0.13  # m: then raises it this much more
+OPEN_ABOVE = 0.5  # m of free height above a place below which a grasp from above does not fit
+
+
+class Pick:
+    """The `pick` skill of `planners.skills.Robot` and its helpers (mixed into it; see `planners.motion.Motion`)."""
+
+    def pick(self, name: str, node: str | None = None, into: str | None = None) -> SkillResult:
+        """Grasp object `name` and lift it LIFT m; `node` (the furniture it is on or in) is where to stand.
+        `into`: where it goes next; a cabinet's shelf takes an object held from the side or pitched down from the
+        front (a hand pointing straight down does not fit under the shelf above), so from a table it is then
+        grasped that way first."""
+        cls = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls]
+        reason = ungraspable_reason(cls)
+        if reason is not None:
+            return SkillResult(False, f"{name}: not graspable ({reason})")
+        if self._fallen_over(name):  # every grasp here is for an object standing up
+            return SkillResult(False, f"{name}: it has fallen over (lies on its side), and no grasp fits it so")
+        graph = self.observer.update()
+        node = node or graph.parent_of(name)
+        position, quat = self.world.object_pose(name)
+        furniture = self.navigator.furniture.get(node)
+        inside = graph.relation_of(name) == RELATION_NAMES[INSIDE] and furniture is not None
+        if (inside and furniture.kind == "cabinet") or self._under_a_shelf(node, position, cls.size[2]):
+            return self._pick_from_shelf(name, node, cls, position, quat)  # from the front, the base placed per grasp
+        side_failures: list[str] = []
+        if into is not None and furniture is not None and self._shelves(into, None):
+            try:  # from the side nearest where the robot would stand
+                stand = np.array(self.navigator.stand_pose(node, tuple(position[:2]))[:2])
+            except NavigationError as error:
+                return SkillResult(False, f"{name}: {error}")
+            toward = (stand - position[:2]) / max(float(np.linalg.norm(stand - position[:2])), 1e-9)
+            yaw = 2.0 * math.atan2(quat[3], quat[0])
+            axes = [np.array([math.cos(yaw + a), math.sin(yaw + a)]) for a in np.arange(4) * math.pi / 2]
+            for out in sorted(axes, key=lambda a: -float(a @ toward)):  # the object's sides, nearest side first
+                if out @ toward > -0.5:
+                    outcome = self._pick_from_shelf(name, node, cls, position, quat, out)
+                    if outcome.success:
+                        return outcome
+                    side_failures.append(outcome.reason.removeprefix(f"{name}: "))
+        stand_failure = ""
+        try:
+            if furniture is None:  # on the floor of a room
+                goal = self.navigator.stand_near(tuple(position[:2]))
+                self.retract()
+                self.navigator.drive_to(goal, self.tucked(), **FREE_MOTION)
+            else:
+                self.go_to(node, position[:2])
+        except NavigationError as error:
+            stand_failure = str(error)  # a base pose checked for the grasp itself may still reach it
+        failures = side_failures
+        rim = None if furniture is None else drawer_rim(self.world, node, position)
+        lift = 0.0 if rim is None else rim + DRAWER_CLEARANCE - (position[2] - cls.size[2] / 2)  # out of the drawer
+        grasps = [replace(g, lift=max(g.lift, lift), approach=g.approach if rim is None else rim_approach(
+            g, rim, DRAWER_CLEARANCE)) for g in top_grasps(cls, position, quat, self.controller.q()[:2])]
+        grasps.sort(key=lambda g: not self._fingers_fit(g))  # stable: the blocked ones last
+        offsets = [o for g in grasps for o in offset_grasps(cls, quat, g) if self._fingers_fit(o)]
+        unchecked = []
+        for grasp in grasps + offsets:  # those with a way in clear of the apartment first
+            outcome = self._grasp_from_above(name, grasp, stand_failure, checked_only=True)
+            if outcome is None:
+                unchecked += [] if "-offset" in grasp.kind else [grasp]
+                continue
+            if outcome.success:
+                self.held = name
+                return outcome
+            failures.append(f"{grasp.kind}: {outcome.reason}")
+        for grasp in unchecked:
+            outcome = self._grasp_from_above(name, grasp, stand_failure)
+            if outcome.success:
+                self.held = name
+                return outcome
+            failures.append(f"{grasp.kind}: {outcome.reason}")
+        return SkillResult(False, f"{name}: every grasp failed ({'; '.join(failures)})")
+
+    def _grasp_from_above(self, name: str, grasp: Grasp, stand_failure: str, checked_only: bool = False
+                          ) -> SkillResult | None:
+        """Try `grasp` from a base pose checked for it (the arm clear of the apartment on the way in), else from
+        where the robot stands, unless it found no place to stand (`stand_failure`, the reason). With
+        `checked_only`, None (nothing moved) where no checked base pose reaches it."""
+        try:
+            path_in = self._go_to_grasp(grasp, np.zeros(3), 0.0, here_first=not stand_failure)
+        except NavigationError as error:
+            return SkillResult(False, str(error))
+        if path_in is None and checked_only:
+            return None
+        if path_in is None and stand_failure:
+            return SkillResult(False, f"{stand_failure}, and no checked base pose reaches the grasp")
+        return self._try_grasp(name, grasp, path_in=path_in)
+
+    def _fingers_fit(self, grasp: Grasp) -> bool:
+        """Whether the fingers, open `grasp.pre_opening`, fit round the object at `grasp` without landing on
+        anything else (a neighbour, a drawer's wall); True where the arm cannot tell from where it stands."""
+        at_grasp = self._ik(grasp.position, grasp.quat())
+        q = at_grasp.q.copy()
+        q[self.controller.n_body:] = grasp.pre_opening
+        return not at_grasp.converged or self.clearance.fingers_clear(q)
+
+    def _pick_from_shelf(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
+                         out: np.ndarray | None = None, replan: bool = True) -> SkillResult:
+        """Pick `name` from a shelf inside cabinet `node`: each grasp of `shelf_grasps` in turn, from a base
+        pose where the arm clears the compartment; the object lifted SIDE_LIFT m, drawn out, then raised.
+        With `out` (a horizontal unit vector, shape (2,)), from an open top instead, for a shelf next: the grasps a
+        shelf takes (side grasps, the fingers as deep on the object as they reach, then pitched ones), approached
+        against `out`. With `replan`, once a failed grasp has moved the object (see `disturbed`), the grasps are
+        planned again for where it now stands (the others were for where it stood)."""
+        furniture = self.navigator.furniture[node]
+        if out is None:
+            out = self.navigator.front_normal(node)
+            front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
+            grasps = shelf_grasps(cls, position, quat, out, front, neighbour_footprints(self.world, name))
+        else:  # side grasps, then pitched ones (a hand pointing straight down, or holding the object front to
+            front = -np.inf  # back, "-along", does not put it down under a shelf)
+            grasps = [g for g in shelf_grasps(cls, position, quat, out, front)
+                      if not g.kind.endswith(("-90", "-along")) and "-rolled" not in g.kind]
+        if not grasps:
+            return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
+        unreachable, failures = [], []
+        pull = np.array([out[0], out[1], 0.0])
+        # every grasp unfolding the arm first (the tried way), then those no base pose reached, swinging straight in
+        for grasp, direct in [*((g, False) for g in grasps), *((g, True) for g in grasps)]:
+            if direct and grasp.kind not in unreachable:
+                continue
+            try:
+                path_in = self._go_to_grasp(grasp, pull, max(front, 0.0) + ENTRY_OUT, direct=direct)
+            except NavigationError as error:
+                failures.append(f"{grasp.kind}: {error}")
+                continue
+            if path_in is None:
+                if not direct:
+                    unreachable.append(grasp.kind)
+                continue
+            if direct:
+                unreachable.remove(grasp.kind)  # reached after all: its outcome is reported instead
+            outcome = self._try_grasp(name, grasp, pull=pull, path_in=path_in)
+            if outcome.success:
+                self.held = name
+                return outcome
+            failures.append(f"{grasp.kind}: {outcome.reason}")
+            now = self.world.object_pose(name)
+            if replan and disturbed(position, quat, *now) and not self._fallen_over(name):
+                again = self._pick_from_shelf(name, node, cls, *now, out, replan=False)
+                return again if again.success else SkillResult(False, f"{again.reason} (moved by {failures})")
+        if unreachable:
+            failures.append(f"{', '.join(unreachable)}: no free base pose reaches the grasp without the arm "
+                            f"touching {node} or its contents")
+        return SkillResult(False, f"{name}: every grasp in {node} failed ({'; '.join(failures)})")
+
+    def _try_grasp(self, name: str, grasp: Grasp, pull: np.ndarray | None = None,
+                   path_in: list[np.ndarray] | None = None) -> SkillResult:
+        """Approach along the grip x axis, close, lift: straight up LIFT m, or with `pull` (a horizontal unit
+        vector out of the furniture, shape (3,)) up SIDE_LIFT m, out SIDE_PULL m and up SIDE_RAISE m.
+        path_in: configurations (each shape (13,)) ending at the approach point, already checked; when None the
+        approach configuration is solved here."""
+        quat = grasp.quat()
+        back = -grasp.rotation[:, 0]  # from the grasp towards where the gripper comes from
+        above = grasp.position + grasp.approach * back
+        if path_in is None:
+            pre = self._ik(above, quat)
+            if not pre.converged:
+                return SkillResult(False, f"approach pose {pre.reason}")
+            path_in = [pre.q]
+        self.reach(path_in[0], grip=grasp.pre_opening)
+        if len(path_in) > 1:
+            self.controller.move_through(path_in[1:], grip=grasp.pre_opening)
+        self.controller.settle(0.003)
+        down = self._line(above, grasp.position, quat, close=True)
+        if down is None:
+            return SkillResult(False, "the descent leaves the arm's reach")
+        start, _ = self.world.object_pose(name)
+        self.controller.move_through(down)
+        self.controller.settle(0.002)
+        opening = self.controller.set_grip(0.0)
+        if opening < MIN_HELD_OPENING:
+            self._back_off(above, quat)
+            return SkillResult(False, f"fingers closed on nothing (opening {opening * 1000:.1f} mm)")
+        up = np.array([0.0, 0.0, 1.0])
+        if pull is not None:
+            legs = [SIDE_LIFT * up, SIDE_PULL * pull, SIDE_RAISE * up]
+        else:
+            legs = [LIFT * up]
+        legs[-1] = legs[-1] + max(0.0, grasp.lift - sum(leg[2] for leg in legs)) * up  # raised further
+        point = grasp.position
+        for leg in legs:  # the base follows a horizontal leg; a vertical one only where the arm alone falls short
+            path = self._line(point, point + leg, quat, base_cost=PULL_BASE_COST if leg[2] == 0 else GRASP_BASE_COST)
+            if path is None and leg[2] != 0:
+                path = self._line(point, point + leg, quat, base_cost=PULL_BASE_COST)
+            if path is None:
+                self._back_off(above, quat)
+                return SkillResult(False, "the lift leaves the arm's reach")
+            self.controller.move_through(path)
+            point = point + leg
+        if grasp.hang:  # turn the hand until the object hangs straight below the grip site
+            com = self.world.data.xipos[self.world.object_body_ids[self.world.object_index(name)]]
+            grip = self.world.data.site("robot/grip")
+            turned = hang_rotation(grip.xmat.reshape(3, 3), grip.xpos, com)
+            path = self._hand_line(point, matrix_to_quat(turned), GRASP_BASE_COST, partial=True)
+            if path:  # as far as the arm turns it
+                self.controller.move_through(path)
+        self.world.step(int(HOLD_SECONDS / self.world.model.opt.timestep))
+        lifted = self.world.object_pose(name)[0][2] - start[2]
+        rise = float(sum(leg[2] for leg in legs))
+        if lifted < 0.5 * rise:
+            self._back_off(above, quat)
+            return SkillResult(False, f"the object rose only {lifted * 100:.1f} cm of {rise * 100:.0f} cm")
+        return SkillResult(True)
+
+    def _back_off(self, above: np.ndarray, quat: np.ndarray) -> None:
+        """Open the fingers and return above the grasp (then tuck)."""
+        self.controller.set_grip(0.05, seconds=0.3)
+        result = self._ik(above, quat, seeds=False)
+        if result.converged:
+            self.controller.move_through([result.q])
+        self.retract()
+
+    def _under_a_shelf(self, node: str, position: np.ndarray, height: float) -> bool:
+        """Whether an object of `height` m at `position` stands on a fixed shelf of furniture `node` with another
+        shelf less than OPEN_ABOVE m above it (a bookshelf's lower levels): only a grasp from the front fits."""
+        furniture = self.spots.furniture.get(node)
+        if furniture is None:
+            return False
+        bottom = position[2] - height / 2
+        below = [(place_world(self.world.layout, furniture, p)["z"], p) for _, p in
+                 [*self.spots.places_of(node, ON), *self.spots.places_of(node, INSIDE)] if p.part is None]
+        below = [(z, p) for z, p in below if z <= bottom + 0.02]
+        return bool(below) and max(below, key=lambda zp: zp[0])[1].clearance < OPEN_ABOVE

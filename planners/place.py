@@ -1,0 +1,248 @@
+"""The `place` skill of `planners.skills.Robot`: put the held object down on or inside furniture, checked in physics.
+
+On an open top: lowered onto a free spot from above, let go, the hand drawn back. On a cabinet's shelf: carried
+in from a base pose where the object and the arm clear the cabinet, eased in slowly, let go and drawn straight
+out. Success is read back from the observed scene graph. Movement comes from `planners.motion`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from homer_sim.catalog import CATALOG
+from homer_sim.graph import INSIDE, RELATION_NAMES
+from homer_sim.validate import ROBOT_RADIUS
+from planners.articulate import base_candidates
+from planners.control import CARRY_MOTION
+from planners.door_skills import ARC_BASE_COST, Held
+from planners.grasps import matrix_to_quat
+from planners.motion import ENTRY_OUT, PASS_OVER, SIDE_LIFT, SkillResult, _yaw_matrix
+from planners.navigation import CLEARANCE, NavigationError
+
+APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
+CARRY_SLIP = 0.03  # m the held object may shift in the hand while carried before a place gives up
+LEVEL_HAND = 0.7  # horizontal part of the grip x axis above which the hand counts as held level
+SHELF_SPOTS = 6  # free spots on a shelf tried for a place, nearest the front first,
+SHELF_SPOT_GAP = 0.05  # m apart at least
+EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
+RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to let go (inside a shelf)
+
+
+class Place:
+    """The `place` skill of `planners.skills.Robot` and its helpers (mixed into it; see `planners.motion.Motion`)."""
+
+    def place(self, node: str, relation: int | None = None) -> SkillResult:
+        """Put the held object at a free spot ON or INSIDE furniture `node`, release it and retreat."""
+        name = self.held
+        if name is None:
+            return SkillResult(False, "place: the robot holds nothing")
+        exclude = {self.world.object_index(name)}
+        shelves = self._shelves(node, relation)
+        if shelves:
+            return self._place_in_shelf(name, node, shelves)
+        spot = None
+        for k, _ in self.spots.places_of(node, relation):
+            spot = self.spots.free_spot(name, node, k, self.rng, exclude)
+            if spot is not None:
+                break
+        if spot is None:
+            return SkillResult(False, f"place: no free spot for {name} on {node}")
+        target = np.array(spot.pos)
+        held_at = self._held_offset(name)  # where the object hangs in the hand (grip frame)
+        size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        try:
+            short = self.go_to(node, target[:2], surface_z=target[2] - size[2] / 2)
+        except NavigationError as error:
+            return SkillResult(False, f"place: {error}")
+        slip = float(np.linalg.norm(self._held_offset(name) - held_at))
+        if slip > CARRY_SLIP and self._hand_empty():
+            self.held = None
+            return SkillResult(False, f"place: {name} fell out of the hand while carried")
+        if slip > CARRY_SLIP:  # still in the hand: the caller decides where it goes down
+            return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand while carried")
+        grip = self.world.data.site("robot/grip")
+        offset = grip.xpos - self.world.object_pose(name)[0]  # keep the object where it hangs now
+        quat = self._held_quat()
+        release = target + offset + np.array([0.0, 0.0, 0.01])
+        above = release + np.array([0.0, 0.0, APPROACH])
+        # Stopped short with the object low: lift it over the surface, then drive in close (the object passes
+        # over the edge) and move it across to above the spot in a straight line.
+        if short and self._grip_line(np.array([*grip.xpos[:2], max(grip.xpos[2], release[2] + PASS_OVER)]), quat):
+            try:
+                self.navigator.drive_to(self.navigator.stand_pose(node, tuple(target[:2])),
+                                        self.controller.target.copy(), **CARRY_MOTION)
+            except NavigationError:
+                pass  # reach from where it stands
+        if not self._grip_line(above, quat):
+            pre = self._ik(above, quat)
+            if not pre.converged:
+                return SkillResult(False, f"place: {name} above {node} is {pre.reason}")
+            self.reach(pre.q)
+        down = self._line(above, release, quat)
+        if down is None:
+            return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
+        self.controller.move_through(down)
+        self.controller.settle(0.003)
+        return self._let_go(name, node, 0.05, self._retreat(release, quat))
+
+    def _retreat(self, release: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
+        """Configurations that take the open hand away from an object it let go of at `release` (m): back along
+        the grip x axis APPROACH m (straight up for a hand pointing down), then, for a hand held level, up as
+        much (it held the object's side: lifted at once, or swung back into the tuck, the fingers knock it
+        over)."""
+        x = self.world.data.site("robot/grip").xmat.reshape(3, 3)[:, 0].copy()
+        back = release - APPROACH * x
+        away = self._line(release, back, quat)
+        if away is None or np.linalg.norm(x[:2]) <= LEVEL_HAND:
+            return away
+        return away + (self._line(back, back + np.array([0.0, 0.0, APPROACH]), quat, seed=away[-1]) or [])
+
+    def _let_go(self, name: str, node: str, opening: float, away: list[np.ndarray] | None,
+                inside: bool = False) -> SkillResult:
+        """Open the fingers to `opening` m per finger, move the hand along `away` (configurations, if any), tuck,
+        let the world settle, and read where `name` ended: on or in `node` (inside it, with `inside`)."""
+        self.controller.set_grip(opening, seconds=0.4)
+        self.held = None
+        if away is not None:
+            self.controller.move_through(away)
+        self.retract()
+        self.world.settle(max_seconds=2.0)
+        graph = self.observer.update()
+        parent, relation = graph.parent_of(name), graph.relation_of(name)
+        if parent != node or (inside and relation != RELATION_NAMES[INSIDE]):
+            return SkillResult(False, f"place: {name} ended {relation} {parent}, not {'inside' if inside else 'on'} "
+                                      f"{node}")
+        if self._fallen_over(name):
+            return SkillResult(False, f"place: {name} fell over on {node}")
+        return SkillResult(True)
+
+    def _shelves(self, node: str, relation: int | None) -> list[int]:
+        """Indices of the shelves inside cabinet `node` that a place with `relation` goes to (none elsewhere)."""
+        furniture = self.navigator.furniture.get(node)
+        if furniture is None or furniture.kind != "cabinet":
+            return []
+        return [k for k, p in self.spots.places_of(node, relation) if p.relation == INSIDE and p.part is None]
+
+    def _place_in_shelf(self, name: str, node: str, places: list[int]) -> SkillResult:
+        """Put the held object on a shelf inside cabinet `node` (`places`: its shelf indices), the reverse of
+        `_pick_from_shelf`: from a base pose where the object and the arm clear the cabinet and its contents, in
+        SIDE_LIFT m above a free spot (spots nearest the front first), down, release, and straight out."""
+        index = self.world.object_index(name)
+        size = np.asarray(CATALOG[self.world.layout.objects[index].cls].size)
+        furniture = self.navigator.furniture[node]
+        out = self.navigator.front_normal(node)
+        front = np.array(furniture.pos) + out * furniture.size[1] / 2
+        spots = [spot for k in places for spot in self.spots.free_spots(name, node, k, self.rng, {index})]
+        spots = _spread(sorted(spots, key=lambda spot: float(np.dot(front - spot.pos[:2], out))), SHELF_SPOT_GAP,
+                        SHELF_SPOTS)
+        if not spots:
+            return SkillResult(False, f"place: no free spot for {name} inside {node}")
+        carry = self._carry_path()
+        self.controller.move_through(carry)
+        posture, held = carry[-1], self._held(name)
+        grip = self.world.data.site("robot/grip")
+        now = grip.xmat.reshape(3, 3)
+        # turned about the vertical: a hand held level points into the shelf; one pointing down keeps its turn
+        # relative to the base, the base facing the shelf
+        level = np.linalg.norm(now[:2, 0]) > LEVEL_HAND
+        turn = math.atan2(-out[1], -out[0]) - (math.atan2(now[1, 0], now[0, 0]) if level else
+                                               self.controller.target[2])
+        rotation = _yaw_matrix(turn) @ now
+        quat = matrix_to_quat(rotation)
+        up, pull = np.array([0.0, 0.0, 1.0]), np.array([out[0], out[1], 0.0])
+        clear_out = np.linalg.norm(size) / 2 + ENTRY_OUT  # the object's centre this far out of the front: all out
+        for spot in spots:
+            release = np.array(spot.pos) + np.array([0.0, 0.0, 0.01]) - rotation @ held.position
+            outside = release + (float(np.dot(front - release[:2], out)) + clear_out) * pull
+            points = [outside + SIDE_LIFT * up, release + SIDE_LIFT * up, release]
+            planned = self._drive_for(points, rotation, posture, held)
+            if planned is None:
+                continue
+            ease, path_in = planned
+            self._ease_to(ease, path_in[0])
+            if self._hand_empty():
+                self.held = None
+                self.retract()
+                return SkillResult(False, f"place: {name} fell out of the hand on the way into {node}")
+            now = self._held(name)  # the object may have turned in the fingers on the way: aim it again
+            again = np.array(spot.pos) + np.array([0.0, 0.0, 0.01]) - rotation @ now.position
+            replanned = self._checked_line(self.controller.target, [points[0], again + SIDE_LIFT * up, again],
+                                           quat, now)
+            slip = float(np.linalg.norm(now.position - held.position))
+            if replanned is not None:
+                path_in, release = [self.controller.target.copy(), *replanned], again
+            elif slip > CARRY_SLIP:  # still held, but no longer as planned: the caller puts it down elsewhere
+                return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand on the way into "
+                                          f"{node} and no longer goes in clear")
+            self.controller.move_through(path_in[1:])
+            self.controller.settle(0.003)
+            return self._let_go(name, node, float(np.mean(self.controller.q()[-2:])) + RELEASE_OPENING,
+                                self._line(release, outside, quat, steps=4, loose_end=True), inside=True)
+        return SkillResult(False, f"place: no free base pose puts {name} into {node} without it or the arm "
+                                  f"touching {node} or its contents ({len(spots)} spots tried)")
+
+    def _ease_path(self, q_from: np.ndarray, q_to: np.ndarray, held: Held) -> list[np.ndarray] | None:
+        """The way (configurations, each shape (13,)) of a held object from configuration q_from to q_to: along a
+        straight grip line as far as it is reachable, the rest in joint space; None if any of it touches anything.
+        """
+        lead = self._hand_line(*self.ik.grip_pose(q_to), ARC_BASE_COST, partial=True, seed=q_from) or []
+        if not all(self.clearance.clear(q, held=held) for q in lead):
+            return None
+        return lead if self._swing_clear(lead[-1] if lead else q_from, q_to, held) else None
+
+    def _ease_to(self, lead: list[np.ndarray], q: np.ndarray) -> None:
+        """Move a held object through `lead` (from `_ease_path`), then to configuration q (shape (13,)) in joint
+        space, slowly (a quick swing turns a long object held by one end in the fingers)."""
+        if lead:
+            self.controller.move_through(lead)
+        self.controller.move_through([q], duration=EASE_SLOWDOWN * self.controller.duration(self.controller.target, q))
+        self.controller.settle(0.003)
+
+    def _drive_for(self, points: list[np.ndarray], rotation: np.ndarray, posture: np.ndarray, held: Held
+                   ) -> tuple[list[np.ndarray], list[np.ndarray]] | None:
+        """Drive, holding `held` in `posture` (shape (13,)), to a free base pose from which the held object eases
+        from `posture` onto the first of `points` (m, each shape (3,)) and the grip site follows them at `rotation`
+        (shape (3, 3)), the object and the arm clear of the apartment all the way; returns (the ease, see
+        `_ease_path`; the configurations along `points`), each configuration shape (13,), or None (the robot
+        stays)."""
+        quat = matrix_to_quat(rotation)
+        reach = self._held_reach()
+        obstacles = self.navigator.open_part_rects()
+        for base in base_candidates(points[-1], rotation, self.controller.q()[:2]):
+            if not self.navigator.plan.disk_is_free(base[0], base[1], ROBOT_RADIUS + CLEARANCE, obstacles):
+                continue
+            q = posture.copy()
+            q[:3] = base
+            start = self.ik.solve(q, points[0], quat, base_cost=ARC_BASE_COST)
+            if not start.converged or not self.clearance.clear(start.q, held=held):
+                continue
+            path = self._checked_line(start.q, points, quat, held)
+            if path is None:
+                continue
+            carried = posture.copy()
+            carried[:3] = base
+            ease = self._ease_path(carried, start.q, held)
+            if ease is None:
+                continue
+            try:
+                self.navigator.drive_to(base, posture, reach, **CARRY_MOTION)
+            except NavigationError:
+                continue
+            path = [start.q, *path]
+            for q_in in [*ease, *path]:
+                q_in[:3] = self.controller.target[:3]  # where the base really stopped
+            return ease, path
+        return None
+
+
+def _spread(spots: list, gap: float, limit: int) -> list:
+    """Up to `limit` of `spots` (in their order), each at least `gap` m from the ones kept before it."""
+    kept = []
+    for spot in spots:
+        if all(math.dist(spot.pos[:2], other.pos[:2]) >= gap for other in kept):
+            kept.append(spot)
+            if len(kept) == limit:
+                break
+    return kept

@@ -1,0 +1,78 @@
+"""Grasps from above of an upright object on an open top: across its narrow side, then turned a quarter; off centre
+with the fingers opened wide; and how far one comes in over a drawer's front. An object with a grip feature, and a
+wide container, are taken as `planners.container_grasps` says. No mujoco import.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from homer_sim.catalog import ObjectClass
+from homer_sim.shapes import cavity
+from planners.container_grasps import _rim_grasps, handle_grasps
+from planners.grasps import (
+    GRIPPER_OPEN,
+    MAX_WIDTH,
+    OFFSET_MARGIN,
+    PAD_HALF,
+    SUPPORT_CLEARANCE,
+    TOP_MARGIN,
+    TOP_NARROW_MARGIN,
+    Grasp,
+    _extent,
+    top_rotation,
+)
+
+OFFSET_MIN = 0.01  # m: off-centre grasps that move the palm less are not worth a try
+
+
+def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_xy: np.ndarray) -> list[Grasp]:
+    """Grasp candidates from above for an upright object at `position` (m, body centre) with body `quat`
+    (wxyz), best first: across its narrow side, then turned a quarter, the fingers open TOP_MARGIN past it, then
+    both again opened only TOP_NARROW_MARGIN past it; rim pinches for containers (on the rim nearest the robot
+    at `robot_xy`)."""
+    if cls.handle is not None:
+        return handle_grasps(cls, position, quat)
+    sx, sy, sz = cls.size
+    yaw = 2.0 * math.atan2(quat[3], quat[0])
+    support = position[2] - sz / 2
+    top = position[2] + sz / 2
+    grip_z = max(top - 0.02, support + PAD_HALF + SUPPORT_CLEARANCE)
+    hollow = cavity(cls)
+    if hollow is not None and min(sx, sy) > MAX_WIDTH - 0.02:
+        return _rim_grasps(hollow, position, yaw, support, robot_xy)
+    grasps = []
+    narrow = yaw + (math.pi / 2 if sy < sx else 0.0)  # fingers close along the narrow side
+    width = min(sx, sy)
+    centre = np.array([position[0], position[1], grip_z])
+    for margin, suffix in ((TOP_MARGIN, ""), (TOP_NARROW_MARGIN, "-narrow")):
+        for finger_yaw, kind in ((narrow, "top"), (narrow + math.pi / 2, "top-turned")):
+            span = width if kind == "top" else max(sx, sy)
+            if span <= MAX_WIDTH:
+                grasps.append(Grasp(centre, top_rotation(finger_yaw), min(GRIPPER_OPEN, span / 2 + margin),
+                                    kind + suffix))
+    return grasps
+
+
+def offset_grasps(cls: ObjectClass, quat: np.ndarray, grasp: Grasp) -> list[Grasp]:
+    """`grasp` (from above) moved off the object's centre along the finger travel, either way, the fingers
+    opened fully (GRIPPER_OPEN) so the near one still passes OFFSET_MARGIN beside the object: the 18 cm palm
+    keeps clear of a wall or a drawer side on the other side; closing, the near finger slides the object
+    (body `quat`, wxyz) to the middle. Empty where that moves the palm less than OFFSET_MIN."""
+    y = grasp.rotation[:, 1]
+    shift = GRIPPER_OPEN - _extent(y, cls, 2.0 * math.atan2(quat[3], quat[0])) / 2 - OFFSET_MARGIN
+    if shift < OFFSET_MIN:
+        return []
+    return [replace(grasp, position=grasp.position + sign * shift * y, pre_opening=GRIPPER_OPEN,
+                    kind=f"{grasp.kind}-offset{'+' if sign > 0 else '-'}") for sign in (1.0, -1.0)]
+
+
+def rim_approach(grasp: Grasp, rim: float, clearance: float) -> float:
+    """How far (m) a grasp from above (grip x straight down) inside a drawer approaches: at least
+    `grasp.approach`, and far enough that the open fingertips (PAD_HALF below the grip site) start `clearance` m
+    above the top of the drawer's front at `rim` (m): the hand then comes over the front, not into it (a finger
+    striking it pushes the drawer shut and the object with it)."""
+    return max(grasp.approach, rim + clearance + PAD_HALF - float(grasp.position[2]))
