@@ -43,7 +43,7 @@ PALM_SETBACK = 0.027  # m: the palm's front face lies 0.035 m behind the grip si
 SIDE_MIN_OVERLAP = 0.015  # m of the object's depth between the pads
 ROUND_PAST = 0.01  # m: the pads reach this far past a round object's centre
 FACE_MIN_TURN = math.radians(3.0)  # rad an object's face must turn off the furniture's front for "-faced" grasps
-FACE_FIRST_TURN = math.radians(8.0)  # rad beyond which "-faced" grasps go first: pads closing on a box turned
+FACE_FIRST_TURN = math.radians(4.0)  # rad beyond which "-faced" grasps go first: pads closing on a box turned
 # further turn it between them, and it keeps turning in the hand
 ROUND_TURNS = tuple(math.radians(a) for a in (35.0, -35.0))  # rad off the furniture's front normal: slanted side
 # grasps of round objects

@@ -81,7 +81,7 @@ def test_a_turned_box_gets_grasps_square_to_its_own_faces() -> None:
     assert not [g for g in shelf_grasps(veg, position, _yawed(0.0), OUT, 0.2) if g.kind.endswith("-faced")]
 
 
-def test_a_box_turned_past_eight_degrees_also_gets_side_grasps_halfway_to_its_face() -> None:
+def test_a_box_turned_past_four_degrees_also_gets_side_grasps_halfway_to_its_face() -> None:
     """The rice (16 x 6 cm, long side front to back) turned 18 degrees: after those square to its face, side
     grasps approached 9 degrees off the front, the pads past the front plane no further than square ones."""
     rice = CATALOG["food_rice"]
@@ -96,7 +96,7 @@ def test_a_box_turned_past_eight_degrees_also_gets_side_grasps_halfway_to_its_fa
         assert math.degrees(math.atan2(-x[1], -x[0])) == pytest.approx(9.0)
         assert (grasp.position[:2] @ -x[:2]) <= 0.12 / math.cos(math.radians(9.0)) - 0.027 + 1e-9
         assert grasp.pre_opening <= GRIPPER_OPEN
-    assert not [g for g in shelf_grasps(rice, position, _yawed(5.0), OUT, 0.12) if g.kind.endswith("-halfway")]
+    assert not [g for g in shelf_grasps(rice, position, _yawed(3.5), OUT, 0.12) if g.kind.endswith("-halfway")]
 
 
 def test_grasps_from_above_open_wide_then_narrow_and_stop_above_the_support() -> None:
@@ -205,12 +205,12 @@ def test_an_off_centre_grasp_keeps_the_near_finger_beside_the_object() -> None:
     assert offset_grasps(wide, _yawed(0.0), top_grasps(wide, position, _yawed(0.0), np.zeros(2))[0]) == []
 
 
-def test_a_box_turned_past_eight_degrees_is_taken_square_to_its_face_first() -> None:
+def test_a_box_turned_past_four_degrees_is_taken_square_to_its_face_first() -> None:
     dryer = CATALOG["hairdryer"]  # 24 x 9 cm, its long side into the furniture
     position = np.array([0.0, 0.0, dryer.size[2] / 2])
-    turned = shelf_grasps(dryer, position, _yawed(12.0), OUT, front=0.2)
+    turned = shelf_grasps(dryer, position, _yawed(6.0), OUT, front=0.2)  # 6.8 degrees slipped 14 mm
     assert turned[0].kind.endswith("-faced") and any(not g.kind.endswith("-faced") for g in turned)
-    slightly = shelf_grasps(dryer, position, _yawed(5.0), OUT, front=0.2)
+    slightly = shelf_grasps(dryer, position, _yawed(3.5), OUT, front=0.2)
     assert not slightly[0].kind.endswith("-faced") and any(g.kind.endswith("-faced") for g in slightly)
 
 
