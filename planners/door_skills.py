@@ -98,6 +98,11 @@ class ClearanceCheck:
         """True if the fingers at configuration q (shape (13,), the finger openings included) touch nothing: an
         open hand about to close round an object has both fingers beside it, on nothing else (a graze of at most
         FINGER_GRAZE m aside)."""
+        return not self.finger_contacts(q)
+
+    def finger_contacts(self, q: np.ndarray) -> set[int]:
+        """Ids of the geoms outside the robot that the fingers at configuration q (shape (13,), the finger
+        openings included) touch deeper than FINGER_GRAZE m."""
         d = self.scratch
         d.qpos[:] = self.world.data.qpos
         d.qpos[self.qpos_adr] = q
@@ -106,7 +111,7 @@ class ClearanceCheck:
         g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
         touching = ((self.fingers[g1] != self.fingers[g2]) & ~(self.robot[g1] & self.robot[g2])
                     & (d.contact.dist[: d.ncon] < -self.FINGER_GRAZE))
-        return not touching.any()
+        return {int(g) for g in np.concatenate([g1[touching], g2[touching]]) if not self.robot[g]}
 
     def clear(self, q: np.ndarray, articulation=None, value: float = 0.0, held: Held | None = None,
               fingers: bool = False) -> bool:

@@ -23,7 +23,7 @@ from planners.motion import ENTRY_OUT, GRASP_BASE_COST, MIN_HELD_OPENING, PULL_B
 from planners.navigation import NavigationError
 from planners.neighbours import neighbour_footprints
 from planners.shelf_grasps import shelf_grasps
-from planners.top_grasps import offset_grasps, rim_approach, top_grasps
+from planners.top_grasps import offset_grasps, rim_approach, squared_grasps, top_grasps
 
 LIFT = 0.15  # m
 DRAWER_CLEARANCE = 0.03  # m an object lifted out of a drawer rises past the top of its front
@@ -32,6 +32,7 @@ HOLD_SECONDS = 0.5
 SIDE_PULL = 0.35  # m: then draws it this far out of the furniture,
 SIDE_RAISE = 0.13  # m: then raises it this much more
 OPEN_ABOVE = 0.5  # m of free height above a place below which a grasp from above does not fit
+CLOSING_STEP = 0.005  # m per finger between the openings at which the fingers' way as they close is checked
 
 
 class Pick:
@@ -83,12 +84,16 @@ class Pick:
         failures = side_failures
         rim = None if furniture is None else drawer_rim(self.world, node, position)
         lift = 0.0 if rim is None else rim + DRAWER_CLEARANCE - (position[2] - cls.size[2] / 2)  # out of the drawer
+        candidates = top_grasps(cls, position, quat, self.controller.q()[:2])
+        if rim is not None:  # in a drawer, last: the palm square to its walls
+            out = self.navigator.front_normal(node)
+            candidates += squared_grasps(cls, position, quat, math.atan2(out[1], out[0]))
         grasps = [replace(g, lift=max(g.lift, lift), approach=g.approach if rim is None else rim_approach(
-            g, rim, DRAWER_CLEARANCE)) for g in top_grasps(cls, position, quat, self.controller.q()[:2])]
-        grasps.sort(key=lambda g: not self._fingers_fit(g))  # stable: the blocked ones last
+            g, rim, DRAWER_CLEARANCE)) for g in candidates]
+        grasps.sort(key=lambda g: ("-squared" in g.kind, not self._fingers_fit(g)))  # stable: the blocked ones last
         offsets = [o for g in grasps for o in offset_grasps(cls, quat, g) if self._fingers_fit(o)]
         unchecked = []
-        for grasp in grasps + offsets:  # those with a way in clear of the apartment first
+        for grasp in sorted(grasps + offsets, key=lambda g: "-squared" in g.kind):  # stable; a clear way in first
             outcome = self._grasp_from_above(name, grasp, stand_failure, checked_only=True)
             if outcome is None:
                 unchecked += [] if "-offset" in grasp.kind else [grasp]
@@ -127,6 +132,23 @@ class Pick:
         q = at_grasp.q.copy()
         q[self.controller.n_body:] = grasp.pre_opening
         return not at_grasp.converged or self.clearance.fingers_clear(q)
+
+    def _closing_clear(self, q: np.ndarray, opening: float) -> bool:
+        """Whether the fingers at configuration q (shape (13,)), closing from `opening` m per finger, keep clear of
+        the furniture on the way (checked every CLOSING_STEP m) but for what they touch open already (the
+        concern of `_fingers_fit`): where one strikes a wall's edge as it closes, the fingers stall there and the
+        other pushes the object against the wall instead of against a pad. Movable objects do not count (the
+        fingers push them aside)."""
+        model = self.world.model
+        movable = set(np.flatnonzero(np.isin(model.geom_bodyid, self.world.object_body_ids)).tolist())
+        q = q.copy()
+        q[self.controller.n_body:] = opening
+        touched = self.clearance.finger_contacts(q) | movable
+        for value in np.arange(opening - CLOSING_STEP, 0.0, -CLOSING_STEP):
+            q[self.controller.n_body:] = value
+            if self.clearance.finger_contacts(q) - touched:
+                return False
+        return True
 
     def _pick_from_shelf(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
                          out: np.ndarray | None = None, replan: bool = True) -> SkillResult:
@@ -183,7 +205,8 @@ class Pick:
         """Approach along the grip x axis, close, lift: straight up LIFT m, or with `pull` (a horizontal unit
         vector out of the furniture, shape (3,)) up SIDE_LIFT m, out SIDE_PULL m and up SIDE_RAISE m.
         path_in: configurations (each shape (13,)) ending at the approach point, already checked; when None the
-        approach configuration is solved here."""
+        approach configuration is solved here. Nothing moves where a closing finger would strike the furniture
+        (see `_closing_clear`)."""
         quat = grasp.quat()
         back = -grasp.rotation[:, 0]  # from the grasp towards where the gripper comes from
         above = grasp.position + grasp.approach * back
@@ -192,6 +215,9 @@ class Pick:
             if not pre.converged:
                 return SkillResult(False, f"approach pose {pre.reason}")
             path_in = [pre.q]
+        planned = self._line(above, grasp.position, quat, close=True, seed=path_in[-1])  # nothing moved yet
+        if planned is not None and not self._closing_clear(planned[-1], grasp.pre_opening):
+            return SkillResult(False, "a closing finger would strike something other than the object")
         self.reach(path_in[0], grip=grasp.pre_opening)
         if len(path_in) > 1:
             self.controller.move_through(path_in[1:], grip=grasp.pre_opening)

@@ -23,10 +23,13 @@ from planners.grasps import (
     TOP_NARROW_MARGIN,
     Grasp,
     _extent,
+    _round,
     top_rotation,
 )
 
 OFFSET_MIN = 0.01  # m: off-centre grasps that move the palm less are not worth a try
+SQUARE_MIN_TURN = math.radians(3.0)  # rad a grasp from above must turn to square the palm to a drawer's walls for
+# a "-squared" grasp to be worth a try
 
 
 def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_xy: np.ndarray) -> list[Grasp]:
@@ -54,6 +57,33 @@ def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_x
             if span <= MAX_WIDTH:
                 grasps.append(Grasp(centre, top_rotation(finger_yaw), min(GRIPPER_OPEN, span / 2 + margin),
                                     kind + suffix))
+    return grasps
+
+
+def squared_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, wall_yaw: float) -> list[Grasp]:
+    """The grasps from above of a box (see `top_grasps`) turned about the vertical, each the least, until the
+    finger travel lies along `wall_yaw` (rad, the direction of a drawer's front normal) or square to it
+    ("-squared"), opened as far past the box's extent along the new travel: a palm turned with a box (up to 20
+    degrees in a drawer) sweeps its 9 cm half length up to 3 cm sideways, into the wall beside a box in a
+    corner; squared, it and its offset grasps (see `offset_grasps`) keep parallel to the walls. The pads meet
+    two corners first and turn the box square as they close. Empty for round objects; none for a grasp less
+    than SQUARE_MIN_TURN off square or wider than MAX_WIDTH squared."""
+    if _round(cls) or cls.handle is not None:
+        return []
+    yaw = 2.0 * math.atan2(quat[3], quat[0])
+    grasps = []
+    for grasp in top_grasps(cls, position, quat, np.asarray(position[:2])):
+        if not grasp.kind.startswith("top"):  # rim pinches of containers
+            continue
+        finger_yaw = math.atan2(grasp.rotation[1, 1], grasp.rotation[0, 1])
+        turn = math.remainder(finger_yaw - wall_yaw, math.pi / 2)
+        rotation = top_rotation(finger_yaw - turn)
+        span = _extent(rotation[:, 1], cls, yaw)
+        if abs(turn) < SQUARE_MIN_TURN or span > MAX_WIDTH:
+            continue
+        margin = TOP_NARROW_MARGIN if grasp.kind.endswith("-narrow") else TOP_MARGIN
+        grasps.append(replace(grasp, rotation=rotation, pre_opening=min(GRIPPER_OPEN, span / 2 + margin),
+                              kind=f"{grasp.kind}-squared"))
     return grasps
 
 

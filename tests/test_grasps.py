@@ -38,7 +38,7 @@ from planners.shelf_grasps import (
     shelf_grasps,
     side_grasps,
 )
-from planners.top_grasps import offset_grasps, rim_approach, top_grasps
+from planners.top_grasps import offset_grasps, rim_approach, squared_grasps, top_grasps
 
 OUT = np.array([1.0, 0.0])  # out of the furniture's front, towards the robot
 
@@ -203,6 +203,23 @@ def test_an_off_centre_grasp_keeps_the_near_finger_beside_the_object() -> None:
         assert abs(float((g.position - grasp.position) @ grasp.rotation[:, 1])) == pytest.approx(shift)
     wide = replace(charger, size=(0.2, 0.14, 0.03))  # 14 cm across: the palm would move only 5 mm, no try
     assert offset_grasps(wide, _yawed(0.0), top_grasps(wide, position, _yawed(0.0), np.zeros(2))[0]) == []
+
+
+def test_squared_grasps_turn_the_palm_to_the_drawer_walls_and_open_past_the_turned_box() -> None:
+    charger = CATALOG["charger"]  # 6 x 4.5 cm, turned 15 degrees in a drawer whose front faces -x
+    position = np.array([0.0, 0.0, charger.size[2] / 2])
+    squared = squared_grasps(charger, position, _yawed(-75.0), math.pi)
+    assert [g.kind for g in squared] == ["top-squared", "top-turned-squared", "top-narrow-squared",
+                                         "top-turned-narrow-squared"]
+    top = squared[0]
+    assert abs(top.rotation[0, 1]) == pytest.approx(1.0)  # the finger travel along the drawer's depth
+    span = 0.06 * math.cos(math.radians(75.0)) + 0.045 * math.sin(math.radians(75.0))  # the turned box along it
+    assert top.pre_opening == pytest.approx(span / 2 + TOP_MARGIN, abs=1e-6)  # to the micrometre
+    assert squared[2].pre_opening == pytest.approx(span / 2 + TOP_NARROW_MARGIN, abs=1e-6)
+    assert squared_grasps(charger, position, _yawed(-89.0), math.pi) == []  # a degree off square: no new grasp
+    assert squared_grasps(CATALOG["candle"], np.array([0.0, 0.0, 0.05]), _yawed(-75.0), math.pi) == []  # round
+
+
 
 
 def test_a_box_turned_past_four_degrees_is_taken_square_to_its_face_first() -> None:
