@@ -98,10 +98,14 @@ class Motion:
         return q
 
     def reach(self, q_goal: np.ndarray, grip: float | None = None) -> None:
-        """Move to configuration q_goal (shape (13,)); from the tuck posture straight there if that swing touches
-        nothing, else through `raised`, quicker (the hand is empty)."""
+        """Move to configuration q_goal (shape (13,)); from the tuck posture straight there if that swing, the
+        fingers opening to `grip` (m per finger) on the way, touches nothing, else through `raised`, quicker (the
+        hand is empty)."""
         if self.folded:
-            via = [] if self._swing_clear(self.controller.target, q_goal) else [self.raised(q_goal[3])]
+            opened = q_goal.copy()
+            if grip is not None:
+                opened[self.controller.n_body:] = grip
+            via = [] if self._swing_clear(self.controller.target, opened) else [self.raised(q_goal[3])]
             self.controller.move_through([*via, q_goal], grip=grip, **FREE_MOTION)
         else:
             self.controller.move_through([q_goal], grip=grip)
