@@ -140,11 +140,12 @@ def segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     return float(np.linalg.norm(p - (a + t * ab)))
 
 
-def base_candidates(grip_pos: np.ndarray, grip_rot: np.ndarray, previous_xy: np.ndarray | None
-                    ) -> list[tuple[float, float, float]]:
+def base_candidates(grip_pos: np.ndarray, grip_rot: np.ndarray, previous_xy: np.ndarray | None,
+                    reach_in: np.ndarray | None = None) -> list[tuple[float, float, float]]:
     """Base poses (x m, y m, yaw rad) behind a grip pose, facing it: nearest `previous_xy` first, or, without
-    one, straight behind the grasp first (BASE_TURNS, then BASE_DISTANCES order)."""
-    approach = grip_rot[:2, 0]
+    one, straight behind the grasp first (BASE_TURNS, then BASE_DISTANCES order). "Behind" is against the grip
+    x's horizontal part, or against `reach_in` (a horizontal direction, shape (2,) or (3,)) where given."""
+    approach = grip_rot[:2, 0] if reach_in is None else np.asarray(reach_in, dtype=float)[:2]
     norm = float(np.linalg.norm(approach))
     if norm > 0.3 or previous_xy is None:
         heading = math.atan2(approach[1], approach[0])

@@ -31,6 +31,8 @@ CARRY_STEP = 0.05  # m between IK waypoints on the way to the carry point
 TURN_STEP = 0.15  # rad the hand turns at most between IK waypoints of a move between poses
 RAISED_SHOULDER = -1.0  # rad: upper arm raised above the tuck
 SIDE_LIFT = 0.03  # m: a side grasp first lifts the object this much off its shelf,
+LOW_SIDE_LIFT = 0.015  # m: or only this much where the wrist would come within ClearanceCheck.MARGIN of the
+# compartment's top or the shelf above (a trash bag's tie 3.5 cm under a cabinet's top)
 ENTRY_OUT = 0.12  # m: a grasp inside furniture is entered from this far in front of its front plane
 ENTRY_STEP = 0.05  # m between checked configurations on the way in
 PASS_OVER = 0.03  # m between a carried object and a surface it is carried over before it is put down
@@ -40,6 +42,8 @@ SWING_STEP = 0.02  # rad between checked configurations of a joint-space swing (
 # under 2 cm: it cannot pass through a drawer front unseen)
 UPRIGHT = 0.7  # z component of an object's up axis below which a put-down object has fallen over
 PITCHED_HAND = 0.25  # horizontal part of the grip x axis above which the hand does not count as pointing down
+ASIDE_LEAN = math.radians(45.0)  # rad: a pitched hand whose grip x leans further than this off the way into the
+# furniture (a "-rolled" grasp leans 90 degrees aside) is also reached from base poses in front of it
 WAYPOINT_TOL = (0.015, np.deg2rad(5.0))  # m, rad: IK tolerance of a straight line's intermediate points (the end
 # point is exact); tight ones stall near joint limits on the way
 
@@ -163,18 +167,28 @@ class Motion:
         return short
 
     def _go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float, here_first: bool = False,
-                     direct: bool = False) -> list[np.ndarray] | None:
+                     direct: bool = False) -> tuple[list[np.ndarray], float] | None:
         """Drive (arm tucked) to a free base pose from which the way into `grasp` is reachable with the arm
         clear of the apartment: the grip `entry` m out along `pull` (a horizontal unit vector out of the
         furniture, shape (3,)) from the approach point, in along a straight line, the approach, and SIDE_LIFT m
-        above the grasp. Returns the configurations (each shape (13,)) from the entry to the approach point, or
-        None (the robot stays) if no base pose works. With `here_first`, where the robot stands is tried first;
-        with `direct`, the arm may also swing straight from the tuck (see `_way_in`)."""
+        (else, out of furniture, LOW_SIDE_LIFT m) above the grasp. Returns the configurations (each shape (13,))
+        from the entry to the approach point and that lift (m), or None (the robot stays) if no base pose works.
+        Base poses face the grasp along its approach, then, where the approach leans more than ASIDE_LEAN aside
+        (see `rolled_grasps`), also into the furniture (against `pull`): beside it often no base pose is free.
+        With `here_first`, where the robot stands is tried first; with `direct`, the arm may also swing straight
+        from the tuck (see `_way_in`)."""
         quat = grasp.quat()
         above = grasp.position - grasp.approach * grasp.rotation[:, 0]
         obstacles = self.navigator.open_part_rects()
         here = [tuple(self.controller.target[:3])] if here_first else []
-        for base in [*here, *base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2])]:
+        lean = grasp.rotation[:2, 0]
+        aside = (np.linalg.norm(lean) > PITCHED_HAND and np.linalg.norm(pull) > 0.0
+                 and float(lean @ -pull[:2]) < math.cos(ASIDE_LEAN) * float(np.linalg.norm(lean)))
+        candidates = base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2])
+        if aside:  # then also those facing into the furniture
+            candidates += base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2], -pull)
+        lifts = (SIDE_LIFT, LOW_SIDE_LIFT) if np.linalg.norm(pull) > 0.0 else (SIDE_LIFT,)  # a shelf grasp's first leg
+        for base in [*here, *candidates]:
             if base not in here and not self.navigator.plan.disk_is_free(base[0], base[1], ROBOT_RADIUS + CLEARANCE,
                                                                          obstacles):
                 continue
@@ -184,8 +198,9 @@ class Motion:
             if not start.converged or not self.clearance.clear(start.q):
                 continue
             path = self._checked_line(start.q, [above + entry * pull, above], quat)
-            if path is None or self._checked_line(path[-1], [above, grasp.position, grasp.position + np.array(
-                    [0.0, 0.0, SIDE_LIFT])], quat) is None:
+            lift = None if path is None else next((h for h in lifts if self._checked_line(
+                path[-1], [above, grasp.position, grasp.position + np.array([0.0, 0.0, h])], quat) is not None), None)
+            if lift is None:
                 continue
             lead = self._way_in(base, start.q, above + entry * pull, quat, direct)
             if lead is None:
@@ -195,7 +210,7 @@ class Motion:
             path_in = [*lead, *path]
             for q_in in path_in:
                 q_in[:3] = self.controller.target[:3]  # where the base really stopped
-            return path_in
+            return path_in, lift
         return None
 
     def _way_in(self, base: np.ndarray, q: np.ndarray, point: np.ndarray, quat: np.ndarray, direct: bool = False

@@ -116,14 +116,14 @@ class Pick:
         where the robot stands, unless it found no place to stand (`stand_failure`, the reason). With
         `checked_only`, None (nothing moved) where no checked base pose reaches it."""
         try:
-            path_in = self._go_to_grasp(grasp, np.zeros(3), 0.0, here_first=not stand_failure)
+            planned = self._go_to_grasp(grasp, np.zeros(3), 0.0, here_first=not stand_failure)
         except NavigationError as error:
             return SkillResult(False, str(error))
-        if path_in is None and checked_only:
+        if planned is None and checked_only:
             return None
-        if path_in is None and stand_failure:
+        if planned is None and stand_failure:
             return SkillResult(False, f"{stand_failure}, and no checked base pose reaches the grasp")
-        return self._try_grasp(name, grasp, path_in=path_in)
+        return self._try_grasp(name, grasp, path_in=None if planned is None else planned[0])
 
     def _fingers_fit(self, grasp: Grasp) -> bool:
         """Whether the fingers, open `grasp.pre_opening`, fit round the object at `grasp` without landing on
@@ -176,17 +176,17 @@ class Pick:
             if direct and grasp.kind not in unreachable:
                 continue
             try:
-                path_in = self._go_to_grasp(grasp, pull, max(front, 0.0) + ENTRY_OUT, direct=direct)
+                planned = self._go_to_grasp(grasp, pull, max(front, 0.0) + ENTRY_OUT, direct=direct)
             except NavigationError as error:
                 failures.append(f"{grasp.kind}: {error}")
                 continue
-            if path_in is None:
+            if planned is None:
                 if not direct:
                     unreachable.append(grasp.kind)
                 continue
             if direct:
                 unreachable.remove(grasp.kind)  # reached after all: its outcome is reported instead
-            outcome = self._try_grasp(name, grasp, pull=pull, path_in=path_in)
+            outcome = self._try_grasp(name, grasp, pull=pull, path_in=planned[0], first_lift=planned[1])
             if outcome.success:
                 self.held = name
                 return outcome
@@ -201,9 +201,10 @@ class Pick:
         return SkillResult(False, f"{name}: every grasp in {node} failed ({'; '.join(failures)})")
 
     def _try_grasp(self, name: str, grasp: Grasp, pull: np.ndarray | None = None,
-                   path_in: list[np.ndarray] | None = None) -> SkillResult:
+                   path_in: list[np.ndarray] | None = None, first_lift: float = SIDE_LIFT) -> SkillResult:
         """Approach along the grip x axis, close, lift: straight up LIFT m, or with `pull` (a horizontal unit
-        vector out of the furniture, shape (3,)) up SIDE_LIFT m, out SIDE_PULL m and up SIDE_RAISE m.
+        vector out of the furniture, shape (3,)) up `first_lift` m (SIDE_LIFT unless the way in was checked only
+        with LOW_SIDE_LIFT), out SIDE_PULL m and up SIDE_RAISE m.
         path_in: configurations (each shape (13,)) ending at the approach point, already checked; when None the
         approach configuration is solved here. Nothing moves where a closing finger would strike the furniture
         (see `_closing_clear`)."""
@@ -234,7 +235,7 @@ class Pick:
             return SkillResult(False, f"fingers closed on nothing (opening {opening * 1000:.1f} mm)")
         up = np.array([0.0, 0.0, 1.0])
         if pull is not None:
-            legs = [SIDE_LIFT * up, SIDE_PULL * pull, SIDE_RAISE * up]
+            legs = [first_lift * up, SIDE_PULL * pull, SIDE_RAISE * up]
         else:
             legs = [LIFT * up]
         legs[-1] = legs[-1] + max(0.0, grasp.lift - sum(leg[2] for leg in legs)) * up  # raised further
