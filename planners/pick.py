@@ -216,14 +216,14 @@ class Pick:
             if not pre.converged:
                 return SkillResult(False, f"approach pose {pre.reason}")
             path_in = [pre.q]
-        planned = self._line(above, grasp.position, quat, close=True, seed=path_in[-1])  # nothing moved yet
+        planned = self._line(above, grasp.position, quat, seed=path_in[-1])  # nothing moved yet
         if planned is not None and not self._closing_clear(planned[-1], grasp.pre_opening):
             return SkillResult(False, "a closing finger would strike something other than the object")
         self.reach(path_in[0], grip=grasp.pre_opening)
         if len(path_in) > 1:
             self.controller.move_through(path_in[1:], grip=grasp.pre_opening)
         self.controller.settle(0.003)
-        down = self._line(above, grasp.position, quat, close=True)
+        down = self._line(above, grasp.position, quat)
         if down is None:
             return SkillResult(False, "the descent leaves the arm's reach")
         start, _ = self.world.object_pose(name)
