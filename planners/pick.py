@@ -90,10 +90,10 @@ class Pick:
             candidates += squared_grasps(cls, position, quat, math.atan2(out[1], out[0]))
         grasps = [replace(g, lift=max(g.lift, lift), approach=g.approach if rim is None else rim_approach(
             g, rim, DRAWER_CLEARANCE)) for g in candidates]
-        grasps.sort(key=lambda g: ("-squared" in g.kind, not self._fingers_fit(g)))  # stable: the blocked ones last
+        grasps.sort(key=lambda g: not self._fingers_fit(g))  # stable: the blocked ones last
         offsets = [o for g in grasps for o in offset_grasps(cls, quat, g) if self._fingers_fit(o)]
         unchecked = []
-        for grasp in sorted(grasps + offsets, key=lambda g: "-squared" in g.kind):  # stable; a clear way in first
+        for grasp in sorted(grasps + offsets, key=lambda g: "-squared" in g.kind):  # squared last; a clear way in first
             outcome = self._grasp_from_above(name, grasp, stand_failure, checked_only=True)
             if outcome is None:
                 unchecked += [] if "-offset" in grasp.kind else [grasp]
