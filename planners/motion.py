@@ -25,8 +25,11 @@ from planners.navigation import CLEARANCE
 MIN_HELD_OPENING = 0.001  # m per finger: closed further means the fingers missed
 GRASP_BASE_COST = 100.0  # IK damping on the base while grasping
 RAISED_TORSO = 0.3  # m
-CARRY_REACH = 0.35  # m from the base centre
+CARRY_REACHES = (0.35, 0.45, 0.55)  # m from the base centre to the carry point, the nearest first (the farther ones
+# for a hand held level only, see `Motion._carry_path`)
+LEVEL_HAND = 0.7  # horizontal part of the grip x axis above which the hand counts as held level
 CARRY_HEIGHT = 1.05  # m
+EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
 CARRY_STEP = 0.05  # m between IK waypoints on the way to the carry point
 TURN_STEP = 0.15  # rad the hand turns at most between IK waypoints of a move between poses
 RAISED_SHOULDER = -1.0  # rad: upper arm raised above the tuck
@@ -131,15 +134,13 @@ class Motion:
 
     def go_to(self, node: str, target_xy: np.ndarray, surface_z: float | None = None) -> bool:
         """Drive to a free base pose in front of furniture `node`, facing `target_xy`: with the arm tucked, or
-        while holding an object with the grip site CARRY_REACH m in front of the base at CARRY_HEIGHT m. A held
-        object keeps clear of open doors, and, if it hangs lower than PASS_OVER above `surface_z` (m, the surface
-        it is for), of the furniture itself: then the robot stops short and returns True."""
+        while holding an object at the carry point (see `_carry_path`). A held object keeps clear of open doors,
+        and, if it hangs lower than PASS_OVER above `surface_z` (m, the surface it is for), of the furniture itself:
+        then the robot stops short and returns True."""
         if self.folded:
             posture = self.tucked()
         else:
-            path = self._carry_path()
-            self.controller.move_through(path)
-            posture = path[-1]
+            posture = self._carry()
         reach, short = 0.0, False
         if self.held is not None:  # the held object sticks out past the base
             size = CATALOG[self.world.layout.objects[self.world.object_index(self.held)].cls].size
@@ -273,21 +274,40 @@ class Motion:
                 path.append(q)
         return path
 
+    def _carry(self) -> np.ndarray:
+        """Move the held object to the carry point along `_carry_path`; returns the posture there (shape (13,))."""
+        path = self._carry_path()
+        self.controller.move_through(path)
+        return path[-1]
+
     def _carry_path(self) -> list[np.ndarray]:
         """Configurations (each shape (13,)) along a straight grip-site line from where the hand is to the carry
-        point, CARRY_REACH m in front of the base at CARRY_HEIGHT m; a joint-space move there could swing the held
-        object down through the furniture or out of the fingers. A hand pointing behind the base's front (and not
-        down) turns on the way about the vertical to point ahead of it: a later move into a shelf the base faces
-        would swing the object past the base and knock it out of the fingers. Otherwise the orientation is kept.
-        Where the line leaves the arm's reach, the hand stays at the last reachable point."""
+        point CARRY_REACHES[0] m in front of the base at CARRY_HEIGHT m, stopped at the last reachable point; a
+        joint-space move there could swing the held object down through the furniture or out of the fingers. A
+        hand held level that stops short of that height (pointing ahead, it reaches no higher than 0.9 m there)
+        goes to the first farther carry point it reaches instead, if the arm and the held object touch nothing on
+        the way (the line may pass over what stands in front), else along the clear line that ends highest. A hand
+        pointing behind the base's front (and not down) turns on the way about the vertical to point ahead of it:
+        a later move into a shelf the base faces would swing the object past the base and knock it out of the
+        fingers. Otherwise the orientation is kept."""
         x, y, yaw = self.controller.target[:3]
-        point = np.array([x + CARRY_REACH * np.cos(yaw), y + CARRY_REACH * np.sin(yaw), CARRY_HEIGHT])
         rotation = self.world.data.site("robot/grip").xmat.reshape(3, 3)
         ahead = np.array([np.cos(yaw), np.sin(yaw)])
         if np.linalg.norm(rotation[:2, 0]) > PITCHED_HAND and rotation[:2, 0] @ ahead < 0.0:  # points back: turn it
             rotation = _yaw_matrix(yaw - math.atan2(rotation[1, 0], rotation[0, 0])) @ rotation
-        return self._hand_line(point, matrix_to_quat(rotation), GRASP_BASE_COST, partial=True) or [
-            self.controller.target.copy()]
+        level = np.linalg.norm(rotation[:2, 0]) > LEVEL_HAND
+        held = None if self.held is None else self._held(self.held)
+        best, height = [self.controller.target.copy()], -np.inf
+        for k, reach in enumerate(CARRY_REACHES if level else CARRY_REACHES[:1]):
+            point = np.array([x + reach * ahead[0], y + reach * ahead[1], CARRY_HEIGHT])
+            path = self._hand_line(point, matrix_to_quat(rotation), GRASP_BASE_COST, partial=True)
+            end = self.ik.grip_pose(path[-1])[0][2] if path else -np.inf
+            if end > height and (k == 0 or all(self.clearance.clear(q, held=held) for q in path)):
+                best, height = path, end
+            if height > CARRY_HEIGHT - WAYPOINT_TOL[0]:
+                break
+        return best
+        return best
 
     def _hand_line(self, point: np.ndarray, quat: np.ndarray, base_cost: float, partial: bool = False,
                    seed: np.ndarray | None = None) -> list[np.ndarray] | None:

@@ -18,15 +18,13 @@ from planners.articulate import base_candidates
 from planners.control import CARRY_MOTION
 from planners.door_skills import ARC_BASE_COST, Held
 from planners.grasps import matrix_to_quat
-from planners.motion import ENTRY_OUT, PASS_OVER, SIDE_LIFT, SkillResult, _yaw_matrix
+from planners.motion import EASE_SLOWDOWN, ENTRY_OUT, LEVEL_HAND, PASS_OVER, SIDE_LIFT, SkillResult, _yaw_matrix
 from planners.navigation import CLEARANCE, NavigationError
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 CARRY_SLIP = 0.03  # m the held object may shift in the hand while carried before a place gives up
-LEVEL_HAND = 0.7  # horizontal part of the grip x axis above which the hand counts as held level
 SHELF_SPOTS = 6  # free spots on a shelf tried for a place, nearest the front first,
 SHELF_SPOT_GAP = 0.05  # m apart at least
-EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
 RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to let go (inside a shelf)
 
 
@@ -139,9 +137,7 @@ class Place:
                         SHELF_SPOTS)
         if not spots:
             return SkillResult(False, f"place: no free spot for {name} inside {node}")
-        carry = self._carry_path()
-        self.controller.move_through(carry)
-        posture, held = carry[-1], self._held(name)
+        posture, held = self._carry(), self._held(name)
         grip = self.world.data.site("robot/grip")
         now = grip.xmat.reshape(3, 3)
         # turned about the vertical: a hand held level points into the shelf; one pointing down keeps its turn
