@@ -70,17 +70,17 @@ class Motion:
     def _line(self, start: np.ndarray, end: np.ndarray, quat: np.ndarray, steps: int = 4,
               base_cost: float = GRASP_BASE_COST, loose_end: bool = False,
               partial: bool = False, seed: np.ndarray | None = None,
-              from_quat: np.ndarray | None = None) -> list[np.ndarray] | None:
+              from_quat: np.ndarray | None = None, exact: bool = False) -> list[np.ndarray] | None:
         """IK configurations along the straight grip-site line start -> end (m), or None if any is unreachable
         (with `partial`, those up to the last reachable point instead); base_cost: IK damping on the base (low
         lets the base back away, e.g. drawing an object off a shelf). Points before the end are solved within
         WAYPOINT_TOL, the end exactly unless `loose_end`. seed: the configuration at `start` (default: the
         controller's target). from_quat: the orientation at `start`, turned evenly into `quat` on the way (default:
-        `quat` all along)."""
+        `quat` all along). exact: every point exact."""
         q = (self.controller.target if seed is None else seed).copy()
         path = []
         for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
-            loose = {} if s == 1.0 and not loose_end else {"position_tol": WAYPOINT_TOL[0],
+            loose = {} if exact or (s == 1.0 and not loose_end) else {"position_tol": WAYPOINT_TOL[0],
                                                             "orientation_tol": WAYPOINT_TOL[1]}
             turned = quat if from_quat is None else slerp(from_quat, quat, s)
             result = self.ik.solve(q, start + s * (end - start), turned, base_cost=base_cost, seeds=False, **loose)
