@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from homer_sim.catalog import CATALOG
 from homer_sim.graph import INSIDE, ON, RELATION_NAMES
 from homer_sim.world import World
+from planners.motion import LEVEL_HAND, PASS_OVER
 from planners.robot import add_robot
 from planners.skills import Robot
 
@@ -118,6 +120,26 @@ def test_robot_fetches_milk_from_the_fridge_to_the_dining_table() -> None:
     drift, name = _others_moved(world, before, "milk")
     assert drift < 0.02, f"{name} moved {drift * 100:.1f} cm"
     assert world.warnings() == 0 and not world.has_nan()
+
+
+def test_a_box_held_from_the_side_is_carried_above_the_dining_table() -> None:
+    """The cereal, taken off its low cupboard shelf with the hand level (a side grasp), is carried with its bottom
+    over the dining table's top: at the nearest carry point a hand held level reaches no higher than 0.9 m, and at
+    breakfast the box, carried that low, struck the table's top on the way and fell."""
+    world = World(extras=[add_robot])
+    world.settle()
+    robot = Robot(world, np.random.default_rng(0))
+    opened = robot.open_articulation("cupboard")
+    assert opened.success, opened.reason
+    picked = robot.pick("food_cereal")
+    assert picked.success, picked.reason
+    robot._carry()
+    hand = world.data.site("robot/grip").xmat.reshape(3, 3)[:, 0]
+    assert np.linalg.norm(hand[:2]) > LEVEL_HAND, hand  # held level
+    top = world.data.geom("table_dining_room/top")
+    table = top.xpos[2] + world.model.geom_size[top.id][2]
+    bottom = world.object_pose("food_cereal")[0][2] - CATALOG["food_cereal"].size[2] / 2
+    assert bottom > table + PASS_OVER, f"box bottom {bottom:.3f} m, table top {table:.3f} m"
 
 
 def test_robot_puts_cereal_from_the_table_back_on_its_cupboard_shelf() -> None:
