@@ -90,7 +90,8 @@ def test_a_box_turned_past_four_degrees_also_gets_side_grasps_halfway_to_its_fac
     kinds = [g.kind for g in grasps]
     halfway = [g for g in grasps if g.kind.endswith("-halfway")]
     assert [g.kind for g in halfway] == ["side-halfway", "side-high-halfway"]
-    assert max(kinds.index(g.kind) for g in grasps if g.kind.endswith("-faced")) < kinds.index("side-halfway")
+    assert max(kinds.index(g.kind) for g in grasps if g.kind.endswith("-faced") and "-along" not in g.kind) < (
+        kinds.index("side-halfway"))
     for grasp in halfway:
         x = grasp.rotation[:, 0]
         assert math.degrees(math.atan2(-x[1], -x[0])) == pytest.approx(9.0)
@@ -325,6 +326,24 @@ def test_along_grasps_close_front_to_back_past_what_the_pads_sweep() -> None:
     assert (g.position - np.array([0.0, 0.0, 0.08])) @ g.rotation[:, 0] == pytest.approx(-back, abs=1e-9)
     close = (footprint(oil, np.array([0.02, 0.055, 0.14]), _yawed(0.0)), 0.28)  # 2 cm off the jar's side
     assert not [g for g in shelf_grasps(jam, position, _yawed(0.0), OUT, 0.085, [close]) if g.kind.endswith("-along")]
+
+
+def test_a_turned_box_gets_along_grasps_in_its_own_plane_first() -> None:
+    """The tea (13 x 7.5 cm, long side front to back) turned 19 degrees: pads closing front to back in the
+    approach's plane meet one of its faces across an edge, and it crept 8 mm out of them in the suite's hold;
+    "-along-faced" grasps close in the box's own vertical plane, and come before those; none for a square box."""
+    tea = CATALOG["tea"]
+    position = np.array([0.0, 0.0, tea.size[2] / 2])
+    grasps = shelf_grasps(tea, position, _yawed(180.0 + 19.0), OUT, 0.2)
+    kinds = [g.kind for g in grasps]
+    faced = [g for g in grasps if g.kind.endswith("-along-faced")]
+    plain = [k for k in kinds if k.endswith("-along")]
+    assert faced and plain and max(kinds.index(g.kind) for g in faced) < min(kinds.index(k) for k in plain)
+    axis = np.array([math.cos(math.radians(19.0)), math.sin(math.radians(19.0))])
+    for grasp in faced:  # the finger travel's level part lies along the box's long axis
+        finger = grasp.rotation[:2, 1] / np.linalg.norm(grasp.rotation[:2, 1])
+        assert abs(finger @ axis) == pytest.approx(1.0)
+    assert not [k for k in (g.kind for g in shelf_grasps(tea, position, _yawed(180.0), OUT, 0.2)) if "faced" in k]
 
 
 def test_an_along_grasp_moves_aside_for_the_palm_only_as_far_as_the_pads_stay_on() -> None:
