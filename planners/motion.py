@@ -29,7 +29,6 @@ CARRY_REACHES = (0.35, 0.45, 0.55)  # m from the base centre to the carry point,
 # for a hand held level only, see `Motion._carry_path`)
 LEVEL_HAND = 0.7  # horizontal part of the grip x axis above which the hand counts as held level
 CARRY_HEIGHT = 1.05  # m
-EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
 CARRY_STEP = 0.05  # m between IK waypoints on the way to the carry point
 TURN_STEP = 0.15  # rad the hand turns at most between IK waypoints of a move between poses
 RAISED_SHOULDER = -1.0  # rad: upper arm raised above the tuck
@@ -306,7 +305,6 @@ class Motion:
                 best, height = path, end
             if height > CARRY_HEIGHT - WAYPOINT_TOL[0]:
                 break
-        return best
         return best
 
     def _hand_line(self, point: np.ndarray, quat: np.ndarray, base_cost: float, partial: bool = False,

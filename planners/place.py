@@ -18,13 +18,14 @@ from planners.articulate import base_candidates
 from planners.control import CARRY_MOTION
 from planners.door_skills import ARC_BASE_COST, Held
 from planners.grasps import matrix_to_quat
-from planners.motion import EASE_SLOWDOWN, ENTRY_OUT, LEVEL_HAND, PASS_OVER, SIDE_LIFT, SkillResult, _yaw_matrix
+from planners.motion import ENTRY_OUT, LEVEL_HAND, PASS_OVER, SIDE_LIFT, SkillResult, _yaw_matrix
 from planners.navigation import CLEARANCE, NavigationError
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 CARRY_SLIP = 0.03  # m the held object may shift in the hand while carried before a place gives up
 SHELF_SPOTS = 6  # free spots on a shelf tried for a place, nearest the front first,
 SHELF_SPOT_GAP = 0.05  # m apart at least
+EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
 RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to let go (inside a shelf)
 
 
