@@ -23,7 +23,7 @@ from planners.motion import ENTRY_OUT, GRASP_BASE_COST, MIN_HELD_OPENING, PULL_B
 from planners.navigation import NavigationError
 from planners.neighbours import neighbour_footprints
 from planners.shelf_grasps import shelf_grasps
-from planners.top_grasps import offset_grasps, rim_approach, squared_grasps, top_grasps
+from planners.top_grasps import offset_grasps, raised_grasps, rim_approach, squared_grasps, top_grasps
 
 LIFT = 0.15  # m
 DRAWER_CLEARANCE = 0.03  # m an object lifted out of a drawer rises past the top of its front
@@ -89,6 +89,7 @@ class Pick:
         if rim is not None:  # in a drawer, last: the palm square to its walls
             out = self.navigator.front_normal(node)
             candidates += squared_grasps(cls, position, quat, math.atan2(out[1], out[0]))
+        candidates += raised_grasps(cls, position, candidates)
         grasps = [replace(g, lift=max(g.lift, lift), approach=g.approach if rim is None else rim_approach(
             g, rim, DRAWER_CLEARANCE)) for g in candidates]
         grasps.sort(key=lambda g: not self._fingers_fit(g))  # stable: the blocked ones last

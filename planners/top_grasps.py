@@ -28,6 +28,8 @@ from planners.grasps import (
 )
 
 OFFSET_MIN = 0.01  # m: off-centre grasps that move the palm less are not worth a try
+RAISED_HOLD = 0.015  # m of an object's top that the pads of a "-raised" grasp hold
+RAISE_MIN = 0.005  # m: grasps raised less than this are not worth a try
 SQUARE_MIN_TURN = math.radians(3.0)  # rad a grasp from above must turn to square the palm to a drawer's walls for
 # a "-squared" grasp to be worth a try
 
@@ -85,6 +87,19 @@ def squared_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, wal
         grasps.append(replace(grasp, rotation=rotation, pre_opening=min(GRIPPER_OPEN, span / 2 + margin),
                               kind=f"{grasp.kind}-squared"))
     return grasps
+
+
+def raised_grasps(cls: ObjectClass, position: np.ndarray, grasps: list[Grasp]) -> list[Grasp]:
+    """Copies of `grasps` from above (see `top_grasps`, `squared_grasps`) of a low object at `position` (m, body
+    centre), those whose fingertips come down to SUPPORT_CLEARANCE over its support, with the grip site raised
+    until the pads hold only RAISED_HOLD m of the object's top ("-raised"): the fingertips, PAD_HALF below the
+    grip site, then pass over a low neighbour lying close beside it (a CD flat beside a charger). None raised
+    less than RAISE_MIN."""
+    support = position[2] - cls.size[2] / 2
+    z = position[2] + cls.size[2] / 2 - RAISED_HOLD + PAD_HALF
+    return [replace(g, position=np.array([g.position[0], g.position[1], z]), kind=f"{g.kind}-raised")
+            for g in grasps if g.kind.startswith("top") and z - g.position[2] >= RAISE_MIN
+            and g.position[2] - PAD_HALF <= support + SUPPORT_CLEARANCE + 1e-9]
 
 
 def offset_grasps(cls: ObjectClass, quat: np.ndarray, grasp: Grasp) -> list[Grasp]:

@@ -38,7 +38,7 @@ from planners.shelf_grasps import (
     shelf_grasps,
     side_grasps,
 )
-from planners.top_grasps import offset_grasps, rim_approach, squared_grasps, top_grasps
+from planners.top_grasps import RAISED_HOLD, offset_grasps, raised_grasps, rim_approach, squared_grasps, top_grasps
 
 OUT = np.array([1.0, 0.0])  # out of the furniture's front, towards the robot
 
@@ -395,3 +395,22 @@ def test_an_object_shoved_or_turned_by_a_failed_grasp_counts_as_disturbed() -> N
     assert disturbed(here, _yawed(69.0), here + [0.007, -0.017, 0.0], _yawed(69.0))  # shoved 1.8 cm
     assert disturbed(here, _yawed(69.0), here, _yawed(62.0))  # turned 7 degrees
     assert disturbed(here, _yawed(178.0), here, _yawed(-178.0))  # 4 degrees across the half turn
+
+
+def test_raised_grasps_pass_over_a_low_neighbour_and_still_hold_the_top() -> None:
+    """A charger (3 cm tall) with a CD (1 cm) lying flat beside it: from above at the usual height the fingertips
+    come down to 0.3 cm over the support, into the CD; raised, they stay 0.5 cm over the CD's top and the pads
+    still hold the charger's top 1.5 cm."""
+    charger = CATALOG["charger"]
+    position = np.array([0.0, 0.0, charger.size[2] / 2])
+    grasps = top_grasps(charger, position, _yawed(0.0), np.array([-1.0, 0.0]))
+    assert min(g.position[2] for g in grasps) - PAD_HALF == pytest.approx(SUPPORT_CLEARANCE)
+    raised = raised_grasps(charger, position, grasps)
+    assert [g.kind for g in raised] == [f"{g.kind}-raised" for g in grasps]
+    for low, high in zip(grasps, raised, strict=True):
+        assert high.position[:2] == pytest.approx(low.position[:2]) and np.array_equal(high.rotation, low.rotation)
+        assert high.position[2] - PAD_HALF == pytest.approx(charger.size[2] - RAISED_HOLD)  # the pads' lower end
+        assert high.position[2] - PAD_HALF > CATALOG["cd"].size[2] + 0.004  # over the CD
+    assert raised_grasps(charger, position, raised) == []  # raised already
+    assert raised_grasps(charger, position, [replace(grasps[0], kind="rim")]) == []  # only grasps from above
+
