@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 from homer_sim.errors import HomerError
+from homer_sim.execution import add_backend_arguments
 
 MAX_DRIFT_M = 0.005  # a settled object may move this far from its spawn pose
 CHECK_SECONDS = 10.0  # physics seconds `world check` simulates
@@ -118,16 +119,17 @@ def cmd_world_export(args: argparse.Namespace) -> int:
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
+    from homer_sim.execution import backend_from_args, describe_usage
     from homer_sim.generate import Sources, generate
 
-    for name in ("households", "train_days", "test_days", "workers"):
-        if getattr(args, name) < (1 if name in ("households", "workers") else 0):
+    for name in ("households", "train_days", "test_days"):
+        if getattr(args, name) < (1 if name == "households" else 0):
             raise HomerError(f"--{name.replace('_', '-')} must be positive, not {getattr(args, name)}")
     sources = Sources(str(args.habits) if args.habits else None, str(args.scripts) if args.scripts else None)
-    result = generate(args.out, args.households, args.train_days, args.test_days, args.seed, args.workers, sources,
-                      progress=not args.json)
+    result = generate(args.out, args.households, args.train_days, args.test_days, args.seed, backend_from_args(args),
+                      sources, progress=not args.json)
     _print(result, args.json, [f"wrote {result['days_written']} days for {', '.join(result['households'])} "
-                               f"to {result['out']} in {result['wall_s']} s"])
+                               f"to {result['out']} in {result['wall_s']} s ({describe_usage(result['execution'])})"])
     return 0
 
 
@@ -222,7 +224,7 @@ def build_parser() -> argparse.ArgumentParser:
     gen.add_argument("--test-days", type=int, default=10, help="test days per household (10)")
     gen.add_argument("--seed", type=int, default=0, help="dataset seed (0)")
     gen.add_argument("--out", type=Path, required=True, help="dataset folder (created; an interrupted run resumes)")
-    gen.add_argument("--workers", type=int, default=1, help="worker processes (1); bytes do not depend on it")
+    add_backend_arguments(gen, "day")
     gen.add_argument("--habits", type=Path, default=None,
                      help="households from a HOMER personaBasedSchedules folder instead of ours")
     gen.add_argument("--scripts", type=Path, default=None,
