@@ -307,7 +307,7 @@ def _stable_hash(text: str) -> int:
 def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: int, wall_s: float,
               extra: dict) -> dict:
     """The `grasp-suite` JSON object from trial results (see the module doc of `homer_sim.cli` for the keys
-    scripts rely on); failure reasons per class and timing are extra keys."""
+    scripts rely on); failure reasons per class, every trial's outcome and timing are extra keys."""
     per_class: dict[str, dict] = {}
     for r in results:
         entry = per_class.setdefault(r.cls, {"trials": 0, "successes": 0, "failures": [],
@@ -332,6 +332,8 @@ def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: i
         "meets_targets": bool(results) and successes / len(results) >= TARGET_OVERALL
         and min(rates) >= TARGET_CLASS,
         "median_trial_wall_s": float(np.median([r.wall_s for r in results])) if results else 0.0,
+        "results": [{"class": r.cls, "trial": r.trial, "success": r.success, "reason": r.reason, "lift_m": r.lift_m,
+                     "slip_m": None if math.isnan(r.slip_m) else r.slip_m} for r in results],
         "wall_s": wall_s,
         **extra,
     }
