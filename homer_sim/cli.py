@@ -224,7 +224,7 @@ def build_parser() -> argparse.ArgumentParser:
     gen.add_argument("--test-days", type=int, default=10, help="test days per household (10)")
     gen.add_argument("--seed", type=int, default=0, help="dataset seed (0)")
     gen.add_argument("--out", type=Path, required=True, help="dataset folder (created; an interrupted run resumes)")
-    add_backend_arguments(gen, "day")
+    add_backend_arguments(gen, "days")
     gen.add_argument("--habits", type=Path, default=None,
                      help="households from a HOMER personaBasedSchedules folder instead of ours")
     gen.add_argument("--scripts", type=Path, default=None,

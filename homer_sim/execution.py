@@ -13,11 +13,12 @@ same error as with the local pool.
 from __future__ import annotations
 
 import argparse
+import itertools
 import logging
 import multiprocessing
 import os
 import socket
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from functools import partial
 from typing import Any
@@ -57,7 +58,7 @@ class Backend:
                 raise ExecutionError(f"--workers {self.workers} sizes the local pool; with --ray the cluster's "
                                      "CPUs set how many tasks run at once (drop --workers)")
 
-    def run(self, fn: Callable[[Any, Any], Any], tasks: Sequence, setup: Callable[..., Any],
+    def run(self, fn: Callable[[Any, Any], Any], tasks: Iterable, setup: Callable[..., Any],
             setup_args: tuple = (), local_state: Any = None, cpus_per_task: int = 1) -> TaskRun:
         """A `TaskRun` of `fn` over `tasks` on this backend (see `TaskRun`)."""
         return TaskRun(self, fn, tasks, setup, setup_args, local_state, cpus_per_task)
@@ -76,13 +77,13 @@ def check_ray_address(address: str) -> str:
                          "cluster), 'ray://HOST:PORT' or 'HOST:PORT'")
 
 
-def add_backend_arguments(parser: argparse.ArgumentParser, unit: str) -> None:
-    """Add `--workers W` and `--ray [ADDRESS]` to a command that runs independent `unit`s."""
+def add_backend_arguments(parser: argparse.ArgumentParser, units: str) -> None:
+    """Add `--workers W` and `--ray [ADDRESS]` to a command that runs independent `units` (a plural noun)."""
     parser.add_argument("--workers", type=int, default=1,
-                        help=f"local worker processes running {unit}s (1: in this process); results do not depend "
+                        help=f"local worker processes running {units} (1: in this process); results do not depend "
                         "on it")
     parser.add_argument("--ray", nargs="?", const=RAY_LOCAL, default=None, metavar="ADDRESS",
-                        help=f"run the {unit}s as Ray tasks (pip install -e '.[cluster]'): no ADDRESS starts Ray on "
+                        help=f"run the {units} as Ray tasks (pip install -e '.[cluster]'): no ADDRESS starts Ray on "
                         "this machine, 'auto' joins the running cluster, 'ray://HOST:PORT' a remote one; outputs "
                         "are written by this process only")
 
@@ -101,6 +102,7 @@ def describe_usage(usage: dict) -> str:
 
 
 # --- running ----------------------------------------------------------------------------------------------
+_NO_TASK = object()
 _STATE: tuple[tuple, Any] | None = None  # (setup, setup_args) and the state it built, in this worker process
 
 
@@ -122,9 +124,9 @@ class TaskRun:
     where the tasks ran.
     """
 
-    def __init__(self, backend: Backend, fn: Callable[[Any, Any], Any], tasks: Sequence, setup: Callable[..., Any],
+    def __init__(self, backend: Backend, fn: Callable[[Any, Any], Any], tasks: Iterable, setup: Callable[..., Any],
                  setup_args: tuple, local_state: Any, cpus_per_task: int) -> None:
-        self.backend, self.fn, self.tasks, self.cpus_per_task = backend, fn, list(tasks), cpus_per_task
+        self.backend, self.fn, self.tasks, self.cpus_per_task = backend, fn, tasks, cpus_per_task
         self.setup, self.setup_args, self.local_state = setup, setup_args, local_state
         self.workers: set[str] = set()
         self._ray_started = False
@@ -144,10 +146,16 @@ class TaskRun:
             self._ray_started = False
 
     def __iter__(self) -> Iterator[Any]:
-        if self.backend.ray is not None:
-            self._results = self._ray()
+        queue = iter(self.tasks)
+        first = next(queue, _NO_TASK)
+        if first is _NO_TASK:  # nothing to do: no pool, no Ray
+            self._results = _nothing()
         else:
-            self._results = self._in_process() if self.backend.workers == 1 else self._pool()
+            queue = itertools.chain([first], queue)
+            if self.backend.ray is not None:
+                self._results = self._ray(queue)
+            else:
+                self._results = self._in_process(queue) if self.backend.workers == 1 else self._pool(queue)
         return self._results
 
     def usage(self) -> dict:
@@ -159,33 +167,27 @@ class TaskRun:
             usage["cluster_cpus"] = self._cluster_cpus
         return usage
 
-    def _in_process(self) -> Iterator[Any]:
-        if not self.tasks:
-            return
+    def _in_process(self, queue: Iterator) -> Iterator[Any]:
         state = self.local_state if self.local_state is not None else self.setup(*self.setup_args)
-        for task in self.tasks:
+        for task in queue:
             result = self.fn(state, task)
             self.workers.add(f"{socket.gethostname()}:{os.getpid()}")
             yield result
 
-    def _pool(self) -> Iterator[Any]:
-        if not self.tasks:
-            return
+    def _pool(self, queue: Iterator) -> Iterator[Any]:
         call = partial(_call, self.fn, self.setup, self.setup_args)
         with multiprocessing.get_context("fork").Pool(self.backend.workers) as pool:
-            for worker, result in pool.imap_unordered(call, self.tasks, chunksize=1):
+            for worker, result in pool.imap_unordered(call, queue, chunksize=1):
                 self.workers.add(worker)
                 yield result
 
-    def _ray(self) -> Iterator[Any]:
-        if not self.tasks:
-            return
+    def _ray(self, queue: Iterator) -> Iterator[Any]:
         ray = _import_ray()
         self._connect(ray)
         remote = ray.remote(_call).options(max_retries=RAY_MAX_RETRIES, retry_exceptions=False,
                                            num_cpus=self.cpus_per_task)
         limit = max(2, int(IN_FLIGHT_PER_CPU * self._cluster_cpus // self.cpus_per_task))
-        queue, pending = iter(self.tasks), {}
+        pending = {}
         try:
             while True:
                 for task in queue:
@@ -214,6 +216,10 @@ class TaskRun:
         if self._cluster_cpus < self.cpus_per_task:
             raise ExecutionError(f"the Ray cluster at {self.backend.ray!r} has {self._cluster_cpus:g} CPUs; a task "
                                  f"needs {self.cpus_per_task}")
+
+
+def _nothing() -> Iterator[Any]:
+    yield from ()
 
 
 def _import_ray() -> Any:

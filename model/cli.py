@@ -9,6 +9,7 @@ import argparse
 import json
 from pathlib import Path
 
+from homer_sim.execution import add_backend_arguments, backend_from_args
 from model.names import DEFAULT_METHODS, METHODS
 
 HEADLINE_WINDOW_MIN = 30
@@ -52,6 +53,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                           help="checkpoint cache folder (default DATA/checkpoints); reused on the next run")
     evaluate.add_argument("--households", default=None, help="comma-separated subset of households (default all)")
     evaluate.add_argument("--train-days", type=int, default=None, help="use only the first N training days")
+    add_backend_arguments(evaluate, "fits (one per household and method)")
     evaluate.add_argument("--quiet", action="store_true", help="no progress bars on stderr")
     evaluate.add_argument("--json", action="store_true", help="print one JSON object")
     evaluate.set_defaults(func=cmd_evaluate)
@@ -83,7 +85,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
     households = [h.strip() for h in args.households.split(",")] if args.households else None
     result = evaluate(args.data, args.methods, args.window, args.checkpoints, households, args.train_days,
-                      progress=not args.quiet)
+                      progress=not args.quiet, backend=backend_from_args(args))
     print(json.dumps(result) if args.json else format_table(result))
     return 0
 

@@ -15,7 +15,8 @@ import hashlib
 import itertools
 import json
 import logging
-from collections.abc import Sequence
+import time
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, fields
 from pathlib import Path
 
@@ -23,9 +24,11 @@ import numpy as np
 from tqdm import tqdm
 
 from homer_sim.dataset import Dataset, DatasetMeta, Day
+from homer_sim.execution import IN_PROCESS, Backend
 from model.methods import check_method, load_predictor, make_predictor, save_predictor
 from model.metrics import Counts, Queries, day_queries, gate, score, window_steps
 from model.predictor import ModelError, Predictor, Rollout
+from model.train import TORCH_THREADS
 
 log = logging.getLogger(__name__)
 VAL_FRACTION = 0.1
@@ -101,33 +104,102 @@ class FitSpec:
         return folder / household / f"{self.method}_{len(self.fit_days)}+{len(self.val_days)}d_{self.key()}.pt"
 
 
+@dataclass(frozen=True)
+class FitTask:
+    """One fit (unless cached), its tuning at `tune_window_min` and its scores on `queries` at `windows_min`:
+    everything a worker needs, read from disk by the driver (see `fit_task`, `run_fit`); `key` names it and
+    `checkpoint` is where the driver keeps the predictor."""
+
+    key: str
+    spec: FitSpec
+    meta: DatasetMeta
+    tune_window_min: int
+    checkpoint: Path | None = None
+    cached: tuple[Predictor, dict] | None = None  # the checkpoint's predictor and info
+    init_state: dict[str, np.ndarray] | None = None  # the pre-trained weights of spec.init
+    queries: Queries | None = None
+    windows_min: tuple[int, ...] = ()
+    pool: np.ndarray | None = None
+    progress: bool = False
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """A FitTask done: the tuned predictor and its provenance, whether it differs from the checkpoint (then the
+    driver writes it there), the counts per window (see `score_windows`), the queries scored, wall seconds."""
+
+    key: str
+    checkpoint: Path | None
+    predictor: Predictor
+    info: dict
+    changed: bool
+    scored: dict[int, tuple[Counts, Counts]]
+    queries: int
+    wall_s: float
+
+    def save(self) -> None:
+        """Write the checkpoint if the predictor is new or newly tuned (on the driver)."""
+        if self.changed and self.checkpoint is not None:
+            save_predictor(self.checkpoint, self.predictor, self.info)
+
+
+def fit_task(key: str, spec: FitSpec, meta: DatasetMeta, tune_window_min: int, path: Path | None = None,
+             **scoring: object) -> FitTask:
+    """The FitTask of `spec`, with the checkpoint at `path` and the pre-trained weights read here, on the
+    driver; `scoring`: queries, windows_min, pool, progress (see FitTask)."""
+    progress = bool(scoring.get("progress", False))
+    cached = load_predictor(path, meta, progress=progress) if path is not None and path.is_file() else None
+    init_state = None
+    if spec.init is not None and cached is None:
+        init_state = load_predictor(spec.init, meta, progress=progress)[0].state()
+    return FitTask(key, spec, meta, tune_window_min, path, cached, init_state, **scoring)
+
+
+def run_fit(_: None, task: FitTask) -> FitResult:
+    """Fit (or take the cached predictor), tune if the cache was not tuned at this window, score; writes nothing.
+    The task function of `homer_sim.execution` (no per-process state)."""
+    started = time.perf_counter()
+    steps = window_steps(task.tune_window_min, task.meta.grid_min)
+    if task.cached is not None:
+        predictor, info = task.cached
+        if info.get("tuned_window_min") == task.tune_window_min and info.get("tuning_version") == TUNING_VERSION:
+            return _scored(task, predictor, info, False, started)
+    else:
+        spec = task.spec
+        predictor = make_predictor(spec.method, task.meta, progress=task.progress, **dict(spec.config))
+        if task.init_state is not None:
+            predictor.load_state(task.init_state)
+        predictor.fit(spec.fit_days, spec.val_days)
+        info = {"fit_days": len(spec.fit_days), "val_days": len(spec.val_days), "init": str(spec.init or "")}
+        report = getattr(predictor, "report", None)
+        if report is not None:
+            info.update(epochs=report.epochs, best_epoch=report.best_epoch, train_s=round(report.wall_s, 2))
+    params, val_score = tune(predictor, day_queries(task.spec.val_days, steps), steps)
+    log.info("%s tuned at %d min: %s (validation objective %.2f)", task.spec.method, task.tune_window_min, params,
+             val_score)
+    info = {**info, "tuned_window_min": task.tune_window_min, "tuning_version": TUNING_VERSION,
+            "val_objective": round(val_score, 4)}
+    return _scored(task, predictor, info, True, started)
+
+
+def _scored(task: FitTask, predictor: Predictor, info: dict, changed: bool, started: float) -> FitResult:
+    scored = {}
+    if task.windows_min:
+        assert task.queries is not None and task.pool is not None, "a FitTask with windows needs queries and a pool"
+        scored = score_windows(predictor, task.queries, task.windows_min, task.meta.grid_min, task.pool)
+    return FitResult(task.key, task.checkpoint, predictor, info, changed, scored,
+                     len(task.queries) if task.queries is not None else 0, time.perf_counter() - started)
+
+
 def fit_tuned(spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | None = None,
               progress: bool = True) -> tuple[Predictor, dict]:
     """Load the cached predictor at `path` or fit one; tune it at `window_min` unless the cache already was.
 
     Returns the predictor and its provenance (days, training report, tuning window and validation objective).
     """
-    steps = window_steps(window_min, meta.grid_min)
-    if path is not None and path.is_file():
-        predictor, info = load_predictor(path, meta, progress=progress)
-        if info.get("tuned_window_min") == window_min and info.get("tuning_version") == TUNING_VERSION:
-            return predictor, info
-    else:
-        predictor = make_predictor(spec.method, meta, progress=progress, **dict(spec.config))
-        if spec.init is not None:
-            predictor.load_state(load_predictor(spec.init, meta, progress=progress)[0].state())
-        predictor.fit(spec.fit_days, spec.val_days)
-        info = {"fit_days": len(spec.fit_days), "val_days": len(spec.val_days), "init": str(spec.init or "")}
-        report = getattr(predictor, "report", None)
-        if report is not None:
-            info.update(epochs=report.epochs, best_epoch=report.best_epoch, train_s=round(report.wall_s, 2))
-    params, val_score = tune(predictor, day_queries(spec.val_days, steps), steps)
-    log.info("%s tuned at %d min: %s (validation objective %.2f)", spec.method, window_min, params, val_score)
-    info = {**info, "tuned_window_min": window_min, "tuning_version": TUNING_VERSION,
-            "val_objective": round(val_score, 4)}
-    if path is not None:
-        save_predictor(path, predictor, info)
-    return predictor, info
+    result = run_fit(None, fit_task(spec.method, spec, meta, window_min, path, progress=progress))
+    result.save()
+    return result.predictor, result.info
 
 
 def used_objects(days: Sequence[Day]) -> np.ndarray:
@@ -147,27 +219,38 @@ def score_windows(predictor: Predictor, queries: Queries, windows_min: Sequence[
 
 def evaluate(data: str | Path, methods: Sequence[str], window_min: int = HEADLINE_WINDOW_MIN,
              checkpoints: str | Path | None = None, households: Sequence[str] | None = None,
-             train_days: int | None = None, progress: bool = True) -> dict:
-    """The `homer evaluate` result: per method, percentages averaged over households (see DESIGN.md)."""
+             train_days: int | None = None, progress: bool = True, backend: Backend = IN_PROCESS) -> dict:
+    """The `homer evaluate` result: per method, percentages averaged over households (see DESIGN.md). Each
+    household and method is one task on `backend` (local processes or Ray); checkpoints are written here."""
     dataset = Dataset(data)
     methods = [check_method(m) for m in methods]
     folder = Path(checkpoints) if checkpoints is not None else dataset.root / "checkpoints"
     names = list(households or dataset.meta.households)
-    per_house: dict[str, dict[str, dict]] = {m: {} for m in methods}
+
+    def tasks() -> Iterator[FitTask]:
+        for house in names:
+            fit, val, test, pool = household_split(dataset, house, train_days)
+            queries = day_queries(test, window_steps(window_min, dataset.meta.grid_min))
+            for method in methods:
+                spec = FitSpec(method, tuple(fit), tuple(val))
+                yield fit_task(f"{house}/{method}", spec, dataset.meta, window_min, spec.path(folder, house),
+                               queries=queries, windows_min=(window_min,), pool=pool,
+                               progress=progress and backend == IN_PROCESS)
+
+    done: dict[tuple[str, str], dict] = {}
     bar = tqdm(total=len(names) * len(methods), desc="evaluate", unit="fit", disable=not progress)
-    for house in names:
-        fit, val, test, pool = household_split(dataset, house, train_days)
-        queries = day_queries(test, window_steps(window_min, dataset.meta.grid_min))
-        for method in methods:
+    with backend.run(run_fit, tasks(), type(None), cpus_per_task=TORCH_THREADS) as run:
+        for result in run:
+            house, method = result.key.split("/")
+            result.save()
+            counts, pooled = result.scored[window_min]
+            done[house, method] = household_result(counts, pooled, result.predictor.params)
             bar.set_postfix(household=house, method=method)
-            spec = FitSpec(method, tuple(fit), tuple(val))
-            predictor, _ = fit_tuned(spec, dataset.meta, window_min, spec.path(folder, house), progress)
-            counts, pooled = score_windows(predictor, queries, [window_min], dataset.meta.grid_min, pool)[window_min]
-            per_house[method][house] = household_result(counts, pooled, predictor.params)
             bar.update()
     bar.close()
+    per_house = {m: {house: done[house, m] for house in names} for m in methods}
     return {"window_min": window_min, "households": names, "train_days": train_days,
-            "methods": {m: summarise(per_house[m]) for m in methods}}
+            "methods": {m: summarise(per_house[m]) for m in methods}, "execution": run.usage()}
 
 
 def household_split(dataset: Dataset, house: str, train_days: int | None

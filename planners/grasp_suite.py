@@ -353,7 +353,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                        help=f"trials per class ({DEFAULT_TRIALS}; {QUICK_TRIALS} with --quick)")
     suite.add_argument("--seed", type=int, default=0, help="seed of the start-pose randomisation (0)")
     suite.add_argument("--classes", nargs="+", metavar="CLASS", help="only these object classes (default: all)")
-    add_backend_arguments(suite, "trial")
+    add_backend_arguments(suite, "trials")
     suite.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
     suite.add_argument("--json", action="store_true", help="print one JSON object")
     suite.set_defaults(func=cmd_grasp_suite)

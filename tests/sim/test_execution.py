@@ -191,3 +191,21 @@ def test_grasp_trials_on_ray_equal_the_local_ones(ray_cluster) -> None:
     assert [(r["class"], r["trial"]) for r in ray["results"]] == [("mug", 0), ("cd", 0)]
     assert local["results"] == ray["results"] and local["overall"] == 1.0  # lift and slip to the last bit
     assert ray["execution"]["mode"] == "ray" and ray["execution"]["workers"] >= 1
+
+
+def test_evaluate_on_ray_gives_the_local_table_and_the_driver_writes_the_checkpoints(ray_cluster,
+                                                                                      tmp_path: Path) -> None:
+    import numpy as np
+
+    from model.evaluate import evaluate
+    from model.synthetic import write_synthetic_dataset
+
+    write_synthetic_dataset(tmp_path / "data", np.random.default_rng(3), households=2, train_days=4, test_days=1,
+                            size="small")
+    local, ray = (evaluate(tmp_path / "data", ["markov", "static_semantic"], 30, tmp_path / name, progress=False,
+                           backend=backend) for name, backend in (("local", Backend()), ("ray", RAY)))
+    assert local.pop("execution")["mode"] == "local" and ray.pop("execution")["mode"] == "ray"
+    assert local == ray
+    assert [p.relative_to(tmp_path / "ray") for p in sorted((tmp_path / "ray").rglob("*.pt"))] == \
+        [p.relative_to(tmp_path / "local") for p in sorted((tmp_path / "local").rglob("*.pt"))]
+    assert len(list((tmp_path / "ray").rglob("*.pt"))) == 4  # 2 households x 2 methods
