@@ -9,7 +9,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from homer_sim.dataset import GRID_MIN, DatasetMeta, Day
+from homer_sim.data.dataset import GRID_MIN, DatasetMeta, Day
 from model.predictor import Predictor, Rollout, one_hot_parents, summarise_step
 
 MINUTES_PER_DAY = 1440

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from homer_sim.dataset import Dataset, DatasetMeta, Day
+from homer_sim.data.dataset import Dataset, DatasetMeta, Day
 from model.methods import check_method, load_predictor, make_predictor, save_predictor
 from model.metrics import Counts, Queries, day_queries, gate, score, window_steps
 from model.predictor import ModelError, Predictor, Rollout

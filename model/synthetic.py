@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from homer_sim.dataset import GRID_MIN, DatasetMeta, Day, write_day, write_meta
+from homer_sim.data.dataset import GRID_MIN, DatasetMeta, Day, write_day, write_meta
 from homer_sim.graph import INSIDE, NONE, ON
 
 ROOMS = ("bathroom", "dining_room", "bedroom", "home_office", "outside")

@@ -1,7 +1,7 @@
 """The assisted day: while the person lives their schedule, the robot observes, predicts, plans with Psi and acts.
 
 At every 10-minute snapshot (the executor's `after_tick` hook) the robot reads the observed scene graph, rolls the
-predictor `window_min` ahead, turns the first predicted changes into a plan (`planners.psi`) and carries it out
+predictor `window_min` ahead, turns the first predicted changes into a plan (`scenarios.psi`) and carries it out
 with its skills in physics. The physics seconds it spends pass on the routine clock: the person's next actions
 wait until the robot is done (they take turns; the robot then drives back to its parking pose, out of the way).
 Failures are kept with the skill's reason and the relocation is not retried within its window.
@@ -17,18 +17,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from homer_sim.catalog import CATALOG
 from homer_sim.errors import HomerError
-from homer_sim.executor import DayLog, Executor
 from homer_sim.graph import INSIDE, ON, GraphError, SceneGraph
+from homer_sim.home.catalog import CATALOG
+from homer_sim.person.avatar import add_avatar
+from homer_sim.person.executor import DayLog, Executor
 from homer_sim.recording import RecordedWorld
 from homer_sim.world import World
 from planners.control import FREE_MOTION
 from planners.grasps import ungraspable_reason
 from planners.navigation import NavigationError
-from planners.psi import Holds, Plan, PlanStep, Relocation, psi, unused_help
 from planners.robot import DEFAULT_POSE, add_robot
 from planners.skills import Robot, SkillResult
+from scenarios.psi import Holds, Plan, PlanStep, Relocation, psi, unused_help
 
 log = logging.getLogger(__name__)
 
@@ -87,7 +88,7 @@ class Assistant:
 
     def __init__(self, predictor, window_min: int = 30, threshold: float | None = None, recording=None,
                  rng: np.random.Generator | None = None) -> None:
-        self.world = RecordedWorld(with_avatar=True, extras=[add_robot])
+        self.world = RecordedWorld(extras=[add_avatar, add_robot])
         self.world.recording = recording
         self.recording = recording
         self.executor = Executor(self.world, recording=recording)

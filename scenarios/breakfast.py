@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from homer_sim.executor import DayLog
-from homer_sim.seeding import day_streams
+from homer_sim.days import day_streams
+from homer_sim.person.executor import DayLog
 from model.metrics import first_change
 from scenarios.assist import Assistant, AssistLog, run_assisted
 from scenarios.breakfast_data import DataSpec, check_meta, ensure_dataset, ensure_predictor, make_generator

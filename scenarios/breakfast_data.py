@@ -22,8 +22,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from homer_sim import __version__
-from homer_sim.dataset import Dataset, DatasetMeta, day_path, write_day, write_meta
-from homer_sim.households import ACTIVITIES, HOURS, OPTIONAL, Household
+from homer_sim.data.dataset import Dataset, DatasetMeta, day_path, write_day, write_meta
+from homer_sim.person.households import ACTIVITIES, HOURS, OPTIONAL, Household
 
 log = logging.getLogger(__name__)
 
@@ -116,9 +116,9 @@ def cache_root() -> Path:
 
 def make_generator(recording=None):
     """The project's day generator with the breakfast household added to its households."""
-    from homer_sim.aliases import Resolver
-    from homer_sim.generate import Generator, Sources
-    from homer_sim.scripts import parse_script
+    from homer_sim.data.generate import Generator, Sources
+    from homer_sim.person.aliases import Resolver
+    from homer_sim.person.scripts import parse_script
 
     generator = Generator(Sources(), recording=recording)
     script = parse_script(BREAKFAST_SCRIPT, "scenarios/breakfast_data.py", "breakfast", "demo",
