@@ -31,8 +31,8 @@ REPO_ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO_ROOT))
 
 from benchmarks._common import emit, machine_info, positive_int, setup_logging, summary
+from homer_sim.data.generate import generate
 from homer_sim.execution import Backend
-from homer_sim.generate import generate
 
 log = logging.getLogger("benchmarks.ray")
 

@@ -12,7 +12,6 @@ same error as with the local pool.
 
 from __future__ import annotations
 
-import argparse
 import itertools
 import logging
 import multiprocessing
@@ -75,30 +74,6 @@ def check_ray_address(address: str) -> str:
         return address
     raise ExecutionError(f"--ray {address!r}: expected nothing (start Ray here), 'auto' (join this machine's "
                          "cluster), 'ray://HOST:PORT' or 'HOST:PORT'")
-
-
-def add_backend_arguments(parser: argparse.ArgumentParser, units: str) -> None:
-    """Add `--workers W` and `--ray [ADDRESS]` to a command that runs independent `units` (a plural noun)."""
-    parser.add_argument("--workers", type=int, default=1,
-                        help=f"local worker processes running {units} (1: in this process); results do not depend "
-                        "on it")
-    parser.add_argument("--ray", nargs="?", const=RAY_LOCAL, default=None, metavar="ADDRESS",
-                        help=f"run the {units} as Ray tasks (pip install -e '.[cluster]'): no ADDRESS starts Ray on "
-                        "this machine, 'auto' joins the running cluster, 'ray://HOST:PORT' a remote one; outputs "
-                        "are written by this process only")
-
-
-def backend_from_args(args: argparse.Namespace) -> Backend:
-    """The Backend that `--workers` and `--ray` (see `add_backend_arguments`) ask for."""
-    return Backend(args.workers, args.ray)
-
-
-def describe_usage(usage: dict) -> str:
-    """One line for people from `TaskRun.usage()`: "2 local workers" or "4 Ray workers on 2 nodes (8 CPUs)"."""
-    if usage["mode"] == "local":
-        return f"{usage['workers']} local worker{'s' * (usage['workers'] != 1)}"
-    return (f"{usage['workers']} Ray worker{'s' * (usage['workers'] != 1)} on {usage['nodes']} "
-            f"node{'s' * (usage['nodes'] != 1)} ({usage.get('cluster_cpus', 0):g} CPUs in the cluster)")
 
 
 # --- running ----------------------------------------------------------------------------------------------

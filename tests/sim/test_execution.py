@@ -19,11 +19,12 @@ from pathlib import Path
 
 import pytest
 
-from homer_sim.activities import ACTIVITY_DIR
-from homer_sim.dataset import read_day
+from homer_sim.data.dataset import read_day
+from homer_sim.data.generate import Sources, generate
+from homer_sim.days import DayKey
 from homer_sim.errors import HomerError
 from homer_sim.execution import RAY_MAX_RETRIES, Backend, ExecutionError, TaskRun, check_ray_address
-from homer_sim.generate import Sources, generate
+from homer_sim.person.activities import ACTIVITY_DIR
 
 HOMER = Path(sys.executable).parent / "homer"
 DAYS = {"n_households": 1, "train_days": 4, "test_days": 1, "seed": 11}  # five days of household_a
@@ -42,7 +43,7 @@ def _logged_days(folder: Path) -> Counter:
 
 # --- without Ray ------------------------------------------------------------------------------------------
 def test_importing_the_execution_module_does_not_import_ray() -> None:
-    code = "import sys, homer_sim.execution, homer_sim.generate; print('ray' in sys.modules)"
+    code = "import sys, homer_sim.execution, homer_sim.data.generate, scenarios.cli.main; print('ray' in sys.modules)"
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout == "False\n"
 
 
@@ -112,7 +113,7 @@ def _die_once(marker: str, victim: tuple, fn, state, task):
 def test_a_killed_worker_is_retried_and_no_day_is_lost_or_duplicated(ray_cluster, reference: Path,
                                                                       tmp_path: Path) -> None:
     marker = tmp_path / "died"
-    backend = DiesOnce(ray="auto", marker=str(marker), victim=("household_a", 0, "train", 2, DAYS["seed"]))
+    backend = DiesOnce(ray="auto", marker=str(marker), victim=("household_a", DayKey(DAYS["seed"], 0, "train", 2)))
     generate(tmp_path / "data", **DAYS, backend=backend, progress=False)
     assert marker.read_text() != str(os.getpid())  # a worker process died, not this one
     assert _digest(tmp_path / "data") == _digest(reference)

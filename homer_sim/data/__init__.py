@@ -1,0 +1,2 @@
+"""The data: day files and their format, dataset generation (the person's days simulated and observed), and
+dataset statistics."""
