@@ -184,7 +184,11 @@ class TaskRun:
         if not ray.is_initialized():
             start_here = {"include_dashboard": False} if self.backend.ray == RAY_LOCAL else {
                 "address": self.backend.ray}
-            ray.init(logging_level=logging.WARNING, **start_here)
+            try:
+                ray.init(logging_level=logging.WARNING, **start_here)
+            except Exception as error:  # Ray raises ConnectionError, RuntimeError, its own: all mean "no cluster"
+                raise ExecutionError(f"cannot start or reach Ray at --ray {self.backend.ray!r}: "
+                                     f"{type(error).__name__}: {error}") from error
             self._ray_started = True
         self._cluster_cpus = float(ray.cluster_resources().get("CPU", 0.0))
         log.info("ray: %s CPUs in the cluster (%s)", self._cluster_cpus, self.backend.ray)
