@@ -65,7 +65,7 @@ def test_without_ray_installed_a_ray_run_names_the_extra(monkeypatch, tmp_path: 
 # --- on a local Ray instance -----------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def ray_cluster():
-    ray = pytest.importorskip("ray", reason="the cluster extra (ray) is not installed")
+    ray = pytest.importorskip("ray", reason="the cluster extra (ray) is not importable", exc_type=ImportError)
     ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])  # workers cannot import this test module
     ray.init(num_cpus=2, include_dashboard=False, logging_level=logging.WARNING)
     yield ray
