@@ -211,7 +211,7 @@ def _import_ray() -> Any:
 
 def _ray_result(ray: Any, ref: Any, task: Any) -> tuple[str, Any]:
     """The (worker, result) of a finished Ray task; a task's own exception is re-raised as raised."""
-    from ray.exceptions import RayTaskError, WorkerCrashedError
+    from ray.exceptions import RayError, RayTaskError, WorkerCrashedError
 
     try:
         return ray.get(ref)
@@ -223,3 +223,5 @@ def _ray_result(ray: Any, ref: Any, task: Any) -> tuple[str, Any]:
     except WorkerCrashedError as error:
         raise ExecutionError(f"task {task!r} lost its worker process {RAY_MAX_RETRIES + 1} times; last: "
                              f"{error}") from None
+    except RayError as error:  # out of memory, a lost node or object: Ray gave up on the task
+        raise ExecutionError(f"Ray lost task {task!r}: {type(error).__name__}: {error}") from None
