@@ -182,10 +182,9 @@ class TaskRun:
 
     def _connect(self, ray: Any) -> None:
         if not ray.is_initialized():
-            start_here = {"include_dashboard": False} if self.backend.ray == RAY_LOCAL else {
-                "address": self.backend.ray}
-            try:
-                ray.init(logging_level=logging.WARNING, **start_here)
+            start_here = {"include_dashboard": False} if self.backend.ray == RAY_LOCAL else {}
+            try:  # address "local" starts a new instance even where a cluster runs (None would join it)
+                ray.init(address=self.backend.ray, logging_level=logging.WARNING, **start_here)
             except Exception as error:  # Ray raises ConnectionError, RuntimeError, its own: all mean "no cluster"
                 raise ExecutionError(f"cannot start or reach Ray at --ray {self.backend.ray!r}: "
                                      f"{type(error).__name__}: {error}") from error
