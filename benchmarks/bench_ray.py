@@ -69,7 +69,7 @@ def start_ray(cpus: int) -> float:
     import ray
 
     started = time.perf_counter()
-    ray.init(num_cpus=cpus, include_dashboard=False, logging_level=logging.WARNING)
+    ray.init(address="local", num_cpus=cpus, include_dashboard=False, logging_level=logging.WARNING)
     return time.perf_counter() - started
 
 
@@ -100,7 +100,7 @@ def main() -> None:
     import ray
 
     busy_before, load_before = cpu_busy(), os.getloadavg()[0]
-    local, on_ray = Backend(workers=args.workers), Backend(ray="auto")  # auto: the instance start_ray started
+    local, on_ray = Backend(workers=args.workers), Backend(ray="auto")  # the instance start_ray started here
     walls: dict[str, list[float]] = {"local": [], "ray": []}
     digests, usage, ray_start_s = set(), {}, []
     with tempfile.TemporaryDirectory() as scratch:

@@ -28,7 +28,7 @@ from homer_sim.person.activities import ACTIVITY_DIR
 
 HOMER = Path(sys.executable).parent / "homer"
 DAYS = {"n_households": 1, "train_days": 4, "test_days": 1, "seed": 11}  # five days of household_a
-RAY = Backend(ray="auto")  # joins the instance the `ray_cluster` fixture started
+RAY = Backend(ray="auto")  # in this process: the instance the `ray_cluster` fixture started
 
 
 def _digest(folder: Path) -> dict[str, str]:
@@ -67,7 +67,7 @@ def test_without_ray_installed_a_ray_run_names_the_extra(monkeypatch, tmp_path: 
 def ray_cluster():
     ray = pytest.importorskip("ray", reason="the cluster extra (ray) is not importable", exc_type=ImportError)
     ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])  # workers cannot import this test module
-    ray.init(num_cpus=2, include_dashboard=False, logging_level=logging.WARNING)
+    ray.init(address="local", num_cpus=2, include_dashboard=False, logging_level=logging.WARNING)
     yield ray
     ray.shutdown()
 
@@ -156,9 +156,11 @@ def test_a_bad_script_fails_a_ray_run_with_the_local_error(ray_cluster, tmp_path
 def test_ctrl_c_on_a_ray_run_leaves_complete_days_that_a_local_run_resumes(ray_cluster, reference: Path,
                                                                            tmp_path: Path) -> None:
     out = tmp_path / "data"
+    address = ray_cluster.get_runtime_context().gcs_address  # this instance, not the latest one on the machine
     command = [str(HOMER), "generate", "--households", "1", "--train-days", "4", "--test-days", "1", "--seed", "11",
-               "--out", str(out), "--ray", "auto", "--json"]
-    driver = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+               "--out", str(out), "--ray", address, "--json"]
+    driver = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              env={**os.environ, "RAY_AUTH_MODE": "token"})  # by address, Ray 2.60 asks for it
     deadline = time.monotonic() + 60
     while not list(out.glob("household_a/*/day_*.npz")) and driver.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)
