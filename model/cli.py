@@ -52,6 +52,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                           help="checkpoint cache folder (default DATA/checkpoints); reused on the next run")
     evaluate.add_argument("--households", default=None, help="comma-separated subset of households (default all)")
     evaluate.add_argument("--train-days", type=int, default=None, help="use only the first N training days")
+    evaluate.add_argument("--metric", choices=("paper", "f1", "both"), default="paper",
+                          help="paper: used/unused object percentages at --window; f1: SLaTe-PRO's relocation F1 "
+                          "per lookahead step 10..60 min; both (default paper; each tuned for its own metric)")
     evaluate.add_argument("--quiet", action="store_true", help="no progress bars on stderr")
     evaluate.add_argument("--json", action="store_true", help="print one JSON object")
     evaluate.set_defaults(func=cmd_evaluate)
@@ -83,8 +86,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
     households = [h.strip() for h in args.households.split(",")] if args.households else None
     result = evaluate(args.data, args.methods, args.window, args.checkpoints, households, args.train_days,
-                      progress=not args.quiet)
-    print(json.dumps(result) if args.json else format_table(result))
+                      progress=not args.quiet, metric=args.metric)
+    tables = [t for t, on in ((format_table, args.metric != "f1"), (format_f1_table, args.metric != "paper")) if on]
+    print(json.dumps(result) if args.json else "\n\n".join(table(result) for table in tables))
     return 0
 
 
@@ -97,6 +101,16 @@ def format_table(result: dict) -> str:
         cells = [_cell(row, group, key) for group, key in (("used", "correct"), ("used", "wrong"), ("used", "missed"),
                                                            ("unused", "correct"), ("unused", "wrong"))]
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def format_f1_table(result: dict) -> str:
+    """SLaTe-PRO's relocation F1 as markdown: per lookahead step and mean, averaged over households."""
+    lines = [f"relocation F1 (SLaTe-PRO), households: {', '.join(result['households'])}", "",
+             "| method | 10 min | 20 min | 30 min | 40 min | 50 min | 60 min | mean |", "|---" * 8 + "|"]
+    for name, row in result["methods"].items():
+        f1 = row["f1"]
+        lines.append(f"| {name} | " + " | ".join(f"{v:.3f}" for v in f1["per_step"]) + f" | {f1['mean']:.3f} |")
     return "\n".join(lines)
 
 
