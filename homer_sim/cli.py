@@ -194,6 +194,14 @@ def positive_int(text: str) -> int:
     return value
 
 
+def cmd_import_homer_plus(args: argparse.Namespace) -> int:
+    from homer_sim.data.homer_plus import import_household
+
+    result = import_household(args.path, args.out, args.name)
+    _print(result, args.json, [f"{k}: {v}" for k, v in result.items()])
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="homer", description="homer-sim: proactive robot assistance in physics")
     parser.add_argument("-v", "--verbose", action="store_true", help="log diagnostics to stderr")
@@ -236,6 +244,18 @@ def build_parser() -> argparse.ArgumentParser:
     stats.add_argument("data", type=Path, help="dataset folder")
     stats.add_argument("--json", action="store_true", help="print one JSON object")
     stats.set_defaults(func=cmd_dataset_stats)
+
+    imports = commands.add_parser("import", help="convert external data into a homer-sim dataset")
+    import_commands = imports.add_subparsers(dest="import_command", required=True, metavar="FORMAT")
+    homer_plus = import_commands.add_parser(
+        "homer-plus", help="one HOMER+ household (HouseholdX/processed_seqLM_coarse) -> dataset folder",
+        description="Read common_data.json, train/*.pt and test/*.pt (weights only) of one household and write it "
+        "into DIR, keeping the upstream train/test split; a DIR holding other HOMER+ households gains this one.")
+    homer_plus.add_argument("path", type=Path, help="the unpacked HouseholdX folder (or its processed_seqLM_coarse)")
+    homer_plus.add_argument("--out", type=Path, required=True, help="dataset folder to create or extend")
+    homer_plus.add_argument("--name", default=None, help="household name in the dataset (default: the folder's)")
+    homer_plus.add_argument("--json", action="store_true", help="print one JSON object")
+    homer_plus.set_defaults(func=cmd_import_homer_plus)
 
     day = commands.add_parser("simulate-day", help="simulate one day of one household, recorded with rerun")
     day.add_argument("--household", default="household_a", help="household name (household_a)")

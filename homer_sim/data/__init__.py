@@ -1,0 +1,1 @@
+"""Dataset code: importers of external data (HOMER+)."""
