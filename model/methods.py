@@ -76,8 +76,10 @@ def load_predictor(path: str | Path, meta: DatasetMeta | None = None, progress: 
         blob = torch.load(Path(path), map_location="cpu", weights_only=True)
     except FileNotFoundError:
         raise ModelError(f"{path}: no such checkpoint") from None
-    except (RuntimeError, OSError, EOFError) as error:
-        raise ModelError(f"{path}: not a readable checkpoint ({error})") from None
+    except Exception as error:  # noqa: BLE001 (torch raises UnpicklingError, RuntimeError, EOFError, ... alike)
+        reason = (str(error).strip().splitlines() or [""])[0][:200]
+        raise ModelError(f"{path}: not a readable checkpoint, corrupted or holding code that weights-only loading "
+                         f"refuses to run ({type(error).__name__}: {reason})") from None
     if not isinstance(blob, dict) or blob.get("format") != CHECKPOINT_FORMAT:
         raise ModelError(f"{path}: checkpoint format {blob.get('format') if isinstance(blob, dict) else None!r}; "
                          f"this homer-sim reads {CHECKPOINT_FORMAT}")
