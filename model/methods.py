@@ -15,6 +15,7 @@ import torch
 
 from homer_sim.dataset import DatasetMeta
 from homer_sim.errors import unknown_name
+from model.analogs import Analogs
 from model.baselines import FreMEn, FreMEnPrior, LastSeen, StaticSemantic
 from model.gnn import GNNConfig
 from model.markov import TimedMarkov
@@ -26,7 +27,7 @@ CHECKPOINT_FORMAT = 1
 GNN_VARIANTS = {"gnn": {}, "gnn_no_attention": {"attention": False}, "gnn_linear_time": {"time_encoding": "linear"}}
 BASELINES: dict[str, Callable[[DatasetMeta], Predictor]] = {
     "fremen": FreMEn, "fremen_prior": FreMEnPrior, "static_semantic": StaticSemantic, "last_seen": LastSeen,
-    "markov": TimedMarkov,
+    "markov": TimedMarkov, "analogs": Analogs,
 }
 assert METHODS == (*GNN_VARIANTS, *BASELINES)
 __all__ = ["DEFAULT_METHODS", "METHODS", "check_method", "load_predictor", "make_predictor", "save_predictor"]
