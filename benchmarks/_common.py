@@ -17,7 +17,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from homer_sim.cli import positive_int  # noqa: E402, F401 (the one argparse type; re-exported)
+from scenarios.cli.common import positive_int  # noqa: E402, F401 (the one argparse type; re-exported)
 
 log = logging.getLogger("benchmarks")
 

@@ -23,7 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from homer_sim.dataset import Dataset  # noqa: E402
+from homer_sim.data.dataset import Dataset  # noqa: E402
 from model.evaluate import HEADLINE_WINDOW_MIN, FitSpec, fit_tuned, household_split  # noqa: E402
 
 TARGET_TRAIN_S = 600.0

@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from homer_sim.dataset import Dataset  # noqa: E402
+from homer_sim.data.dataset import Dataset  # noqa: E402
 from model.evaluate import split_days  # noqa: E402
 from model.gnn import GNNConfig  # noqa: E402
 from model.synthetic import write_synthetic_dataset  # noqa: E402

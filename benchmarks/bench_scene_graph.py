@@ -19,7 +19,7 @@ REPO_ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO_ROOT))
 
 from benchmarks._common import emit, machine_info, pin_to_one_core, positive_int, setup_logging, summary
-from homer_sim.catalog import CATALOG
+from homer_sim.home.catalog import CATALOG
 from homer_sim.observe import SceneGraphObserver
 from homer_sim.world import World
 

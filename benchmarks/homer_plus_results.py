@@ -24,10 +24,10 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks.paper_results import Runs, dataset_fingerprint  # noqa: E402
-from homer_sim.dataset import Dataset  # noqa: E402
-from model.cli import format_f1_table, format_table  # noqa: E402
+from homer_sim.data.dataset import Dataset  # noqa: E402
 from model.evaluate import HEADLINE_WINDOW_MIN, FitSpec, household_scores, household_split, summarise  # noqa: E402
 from model.names import DEFAULT_METHODS  # noqa: E402
+from model.report import format_f1_table, format_table  # noqa: E402
 
 log = logging.getLogger("homer_plus_results")
 PUBLISHED_F1 = {"gnn (STOT, published)": 0.43, "SLaTe-PRO (published)": 0.57}

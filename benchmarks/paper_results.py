@@ -31,8 +31,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import numpy as np  # noqa: E402
 
-from homer_sim.dataset import Dataset, Day  # noqa: E402
-from model.cli import format_table  # noqa: E402
+from homer_sim.data.dataset import Dataset, Day  # noqa: E402
 from model.evaluate import (  # noqa: E402
     CURVE_WINDOWS_MIN,
     HEADLINE_WINDOW_MIN,
@@ -48,6 +47,7 @@ from model.evaluate import (  # noqa: E402
 from model.metrics import Counts, day_queries  # noqa: E402
 from model.names import DEFAULT_METHODS  # noqa: E402
 from model.plots import days_curve, window_bars  # noqa: E402
+from model.report import format_table  # noqa: E402
 
 log = logging.getLogger("paper_results")
 EXPERIMENTS = ("main", "ablation", "days", "pretrain")

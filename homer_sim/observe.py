@@ -2,7 +2,7 @@
 
 Never from the layout: the observer looks at `MjData` (body poses, contacts, rays against geoms, interior
 volume sites) and names what it finds with the node that owns each geom or site. The one exception is where
-furniture stands, which never changes: most furniture is fused into the world body (see `homer_sim.build`),
+furniture stands, which never changes: most furniture is fused into the world body (see `homer_sim.home.build`),
 so it has no body pose to read. It keeps the graph incrementally: `update()` re-observes only bodies that
 moved since they were last observed and have come to rest, so sleeping bodies cost one vectorised pose
 comparison.
@@ -15,12 +15,12 @@ from collections.abc import Collection
 import mujoco
 import numpy as np
 
-from homer_sim.build import FLOOR_GROUP, VOLUME_GROUP
-from homer_sim.catalog import CATALOG
 from homer_sim.errors import PhysicsError
 from homer_sim.graph import INSIDE, NONE, ON, SceneGraph
-from homer_sim.placement import base_height
-from homer_sim.shapes import cavity
+from homer_sim.home.build import FLOOR_GROUP, VOLUME_GROUP
+from homer_sim.home.catalog import CATALOG
+from homer_sim.home.placement import base_height
+from homer_sim.home.shapes import cavity
 from homer_sim.world import World
 
 SUPPORT_TOL = 0.02  # m: a support surface may lie this far below an object's lowest point

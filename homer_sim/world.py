@@ -12,14 +12,14 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from homer_sim.apartment import default_layout
-from homer_sim.build import build_spec
-from homer_sim.catalog import CATALOG
 from homer_sim.errors import unknown_name
-from homer_sim.furniture import furniture_geometry
-from homer_sim.layout import Layout, declared_graph
-from homer_sim.placement import start_poses
-from homer_sim.validate import validate_layout
+from homer_sim.home.apartment import default_layout
+from homer_sim.home.build import build_spec
+from homer_sim.home.catalog import CATALOG
+from homer_sim.home.furniture import furniture_geometry
+from homer_sim.home.layout import Layout, declared_graph
+from homer_sim.home.placement import start_poses
+from homer_sim.home.validate import validate_layout
 
 SETTLE_SPEED = 5e-3  # m/s: a body whose centre of mass moves slower counts as at rest (thin objects may
 # keep rocking by a fraction of a degree on curved supports; that does not change where they are)
@@ -45,14 +45,14 @@ class World:
     object_names: movable nodes (objects and props) in layout order; object_body_ids aligns with it.
     """
 
-    def __init__(self, layout: Layout | None = None, validate: bool = True, with_avatar: bool = False,
+    def __init__(self, layout: Layout | None = None, validate: bool = True,
                  extras: Sequence[Callable[[mujoco.MjSpec], None]] = ()) -> None:
-        """extras: functions that add to the spec before it is compiled (the robot, from `planners`), so the
-        core never imports what is built on it."""
+        """extras: functions that add to the spec before it is compiled, in order (the person's
+        `add_avatar`, the robot's `add_robot`), so the world never imports what is built on it."""
         self.layout = layout or default_layout()
         if validate:
             validate_layout(self.layout)
-        self.spec = build_spec(self.layout, with_avatar=with_avatar)
+        self.spec = build_spec(self.layout)
         for extra in extras:
             extra(self.spec)
         self.compile_warnings: list[str] = []

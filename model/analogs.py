@@ -23,7 +23,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from homer_sim.dataset import GRID_MIN, DatasetMeta, Day
+from homer_sim.data.dataset import GRID_MIN, DatasetMeta, Day
 from model.baselines import MINUTES_PER_DAY
 from model.predictor import THRESHOLDS, ModelError, Predictor, Rollout, summarise_step
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from homer_sim.dataset import DatasetMeta
+from homer_sim.data.dataset import DatasetMeta
 from homer_sim.errors import unknown_name
 from model.analogs import Analogs
 from model.baselines import FreMEn, FreMEnPrior, LastSeen, StaticSemantic

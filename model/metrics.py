@@ -22,7 +22,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from homer_sim.dataset import Day
+from homer_sim.data.dataset import Day
 from model.predictor import ModelError, Rollout
 
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from homer_sim.dataset import GRID_MIN, DatasetMeta, Day
+from homer_sim.data.dataset import GRID_MIN, DatasetMeta, Day
 from homer_sim.errors import HomerError
 
 THRESHOLDS = (0.0, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)  # decision-rule grid, see gate

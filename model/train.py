@@ -18,7 +18,7 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from homer_sim.dataset import GRID_MIN, DatasetMeta, Day
+from homer_sim.data.dataset import GRID_MIN, DatasetMeta, Day
 from model.gnn import GNNConfig, ObjectGraphNet
 from model.predictor import THRESHOLDS, Predictor, Rollout, Transitions, transitions
 

@@ -10,8 +10,8 @@ import math
 
 import numpy as np
 
-from homer_sim.catalog import ObjectClass
-from homer_sim.shapes import WALL_THICKNESS, handle_boxes
+from homer_sim.home.catalog import ObjectClass
+from homer_sim.home.shapes import WALL_THICKNESS, handle_boxes
 from planners.grasps import (
     FINGER_HALF_THICKNESS,
     GRIPPER_OPEN,
@@ -164,7 +164,7 @@ def hang_rotation(rotation: np.ndarray, grip: np.ndarray, com: np.ndarray) -> np
 
 def pot_handle_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outward: np.ndarray) -> list[Grasp]:
     """Grasps of an upright pot at `position` (m, body centre; body `quat`, wxyz) by a flat side handle (see
-    `homer_sim.shapes.handle_boxes`) pointing within POT_HANDLE_FACING of horizontal unit `outward` (shape (3,),
+    `homer_sim.home.shapes.handle_boxes`) pointing within POT_HANDLE_FACING of horizontal unit `outward` (shape (3,),
     out of the furniture's front), along the handle towards the pot: first level, the fingers closing
     vertically on the plate (the pads' length along it); then pitched POT_HANDLE_PITCHES down, the fingers
     closing across the plate's width on its side faces (a level hand that low is often out of the arm's reach

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from homer_sim.validate import ROBOT_RADIUS
+from homer_sim.home.validate import ROBOT_RADIUS
 from planners.articulate import (
     APPROACH,
     BASE_CLEARANCE,

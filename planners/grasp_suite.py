@@ -15,8 +15,6 @@ stays fast.
 
 from __future__ import annotations
 
-import argparse
-import json
 import logging
 import math
 import sys
@@ -27,10 +25,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from homer_sim.apartment import default_layout
-from homer_sim.catalog import CATALOG, FAMILIES
-from homer_sim.cli import positive_int
 from homer_sim.graph import INSIDE
+from homer_sim.home.apartment import default_layout
+from homer_sim.home.catalog import CATALOG, FAMILIES
 
 if TYPE_CHECKING:
     from homer_sim.world import World
@@ -99,7 +96,7 @@ def quick_subset(included: dict[str, str]) -> dict[str, str]:
 def _open_holder(world: World, name: str) -> None:
     """Open what closes over object `name`: every door of the cabinet it is in, or the drawer it lies in (its
     contents carried along with the drawer, as the open drawer would carry them)."""
-    from homer_sim.furniture import furniture_geometry
+    from homer_sim.home.furniture import furniture_geometry
 
     decl = world.layout.objects[world.object_index(name)]
     furniture = world.layout.furniture_by_name().get(decl.parent)
@@ -275,8 +272,8 @@ def _stable_hash(text: str) -> int:
 
 def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: int, wall_s: float,
               extra: dict) -> dict:
-    """The `grasp-suite` JSON object from trial results (see the module doc of `homer_sim.cli` for the keys
-    scripts rely on); failure reasons per class and timing are extra keys."""
+    """The `grasp-suite` JSON object from trial results: `trials`, `overall`, `per_class` and `excluded` keep
+    their meaning for scripts; failure reasons per class and timing are extra keys."""
     per_class: dict[str, dict] = {}
     for r in results:
         entry = per_class.setdefault(r.cls, {"trials": 0, "successes": 0, "failures": [],
@@ -304,35 +301,6 @@ def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: i
         "wall_s": wall_s,
         **extra,
     }
-
-
-# --- command line ---------------------------------------------------------------------------------------
-def register(subparsers: argparse._SubParsersAction) -> None:
-    """Add the `grasp-suite` subcommand to the `homer` parser's subparsers."""
-    suite = subparsers.add_parser(
-        "grasp-suite", help="pick every graspable object class from randomised start poses",
-        description=f"Pick each robot-graspable object class of the apartment from randomised start poses on "
-        f"its home surface or shelf; success: lifted {MIN_LIFT * 100:.0f} cm and held {HOLD_SECONDS:.0f} s with "
-        f"slip under {MAX_SLIP * 1000:.0f} mm. Exit status 1 when the overall rate is below {TARGET_OVERALL} or a "
-        f"class is below {TARGET_CLASS}.")
-    suite.add_argument("--quick", action="store_true", help="one class of each shape family (fast subset)")
-    suite.add_argument("--trials", type=positive_int, default=None,
-                       help=f"trials per class ({DEFAULT_TRIALS}; {QUICK_TRIALS} with --quick)")
-    suite.add_argument("--seed", type=int, default=0, help="seed of the start-pose randomisation (0)")
-    suite.add_argument("--classes", nargs="+", metavar="CLASS", help="only these object classes (default: all)")
-    suite.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
-    suite.add_argument("--json", action="store_true", help="print one JSON object")
-    suite.set_defaults(func=cmd_grasp_suite)
-
-
-def cmd_grasp_suite(args: argparse.Namespace) -> int:
-    result = run_suite(quick=args.quick, trials=args.trials, seed=args.seed, progress=not args.quiet,
-                       classes=chosen_classes(args.classes) if args.classes else None)
-    if args.json:
-        print(json.dumps(result))
-    else:
-        print(format_table(result))
-    return 0 if result["meets_targets"] else 1
 
 
 def chosen_classes(names: list[str]) -> dict[str, str]:

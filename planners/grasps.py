@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from homer_sim.catalog import ObjectClass
-from homer_sim.shapes import cavity
+from homer_sim.home.catalog import ObjectClass
+from homer_sim.home.shapes import cavity
 
 MAX_WIDTH = 0.15  # m: widest grasp (stroke 0.16 m minus a margin)
 MIN_HEIGHT = 0.008  # m: thinner objects leave the pads nothing to hold above the support

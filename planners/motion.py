@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from homer_sim.catalog import CATALOG
-from homer_sim.validate import ROBOT_RADIUS
+from homer_sim.home.catalog import CATALOG
+from homer_sim.home.validate import ROBOT_RADIUS
 from planners.articulate import base_candidates
 from planners.control import CARRY_MOTION, FREE_MOTION
 from planners.door_skills import ARC_BASE_COST, Held

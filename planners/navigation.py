@@ -1,7 +1,7 @@
 """Navigation of the holonomic base over the floor plan's 2D occupancy grid.
 
 Base poses are chosen in front of a furniture's access side (as the layout validator does, from
-`homer_sim.validate`), centred on the target and free of walls, furniture and open doors. Paths are A* on the
+`homer_sim.home.validate`), centred on the target and free of walls, furniture and open doors. Paths are A* on the
 grid inflated by the robot's radius; the base follows them with the arm tucked, through `Controller`.
 """
 
@@ -12,10 +12,10 @@ import math
 import numpy as np
 
 from homer_sim.errors import HomerError
-from homer_sim.floorplan import find_path, floor_plan, inflate, path_length
-from homer_sim.furniture import local_to_world
-from homer_sim.placement import base_height
-from homer_sim.validate import ROBOT_RADIUS, access_sides
+from homer_sim.home.floorplan import find_path, floor_plan, inflate, path_length
+from homer_sim.home.furniture import local_to_world
+from homer_sim.home.placement import base_height
+from homer_sim.home.validate import ROBOT_RADIUS, access_sides
 from planners.control import SPEED_FRACTION, Controller
 
 STAND_DISTANCES = np.arange(0.34, 0.81, 0.02)  # m from the furniture's front face to the base centre

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from homer_sim.catalog import CATALOG
+from homer_sim.home.catalog import CATALOG
 from planners.grasps import footprint
 
 NEIGHBOUR_RADIUS = 0.4  # m between object centres beyond which a neighbour is not in a grasp's way

@@ -12,9 +12,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from homer_sim.catalog import CATALOG
 from homer_sim.graph import INSIDE, ON, RELATION_NAMES
-from homer_sim.placement import place_world
+from homer_sim.home.catalog import CATALOG
+from homer_sim.home.placement import place_world
 from planners.articulate import drawer_rim
 from planners.container_grasps import hang_rotation
 from planners.control import FREE_MOTION

@@ -13,8 +13,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from homer_sim.catalog import ObjectClass
-from homer_sim.shapes import cavity
+from homer_sim.home.catalog import ObjectClass
+from homer_sim.home.shapes import cavity
 from planners.container_grasps import _tilted_rims, handle_grasps, pot_handle_grasps
 from planners.grasps import (
     FINGER_HALF_THICKNESS,

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
-from homer_sim.spots import Spots
 from planners.control import Controller
 from planners.door_skills import ClearanceCheck, PartMover
 from planners.ik import IKSolver

@@ -10,8 +10,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from homer_sim.catalog import ObjectClass
-from homer_sim.shapes import cavity
+from homer_sim.home.catalog import ObjectClass
+from homer_sim.home.shapes import cavity
 from planners.container_grasps import _rim_grasps, handle_grasps
 from planners.grasps import (
     GRIPPER_OPEN,

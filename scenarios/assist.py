@@ -1,7 +1,7 @@
 """The assisted day: while the person lives their schedule, the robot observes, predicts, plans with Psi and acts.
 
 At every 10-minute snapshot (the executor's `after_tick` hook) the robot reads the observed scene graph, rolls the
-predictor `window_min` ahead, turns the first predicted changes into a plan (`planners.psi`) and carries it out
+predictor `window_min` ahead, turns the first predicted changes into a plan (`scenarios.psi`) and carries it out
 with its skills in physics. The physics seconds it spends pass on the routine clock: the person's next actions
 wait until the robot is done (they take turns; the robot then drives back to its parking pose, out of the way).
 Failures are kept with the skill's reason and the relocation is not retried within its window.
@@ -13,22 +13,25 @@ an apartment without a robot, so what the person would have moved unassisted is 
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from homer_sim.catalog import CATALOG
+from homer_sim.clock import DEFAULT_WINDOW_MIN
 from homer_sim.errors import HomerError
-from homer_sim.executor import DayLog, Executor
 from homer_sim.graph import INSIDE, ON, GraphError, SceneGraph
+from homer_sim.home.catalog import CATALOG
+from homer_sim.person.avatar import add_avatar
+from homer_sim.person.executor import DayLog, Executor
 from homer_sim.recording import RecordedWorld
 from homer_sim.world import World
 from planners.control import FREE_MOTION
 from planners.grasps import ungraspable_reason
 from planners.navigation import NavigationError
-from planners.psi import Holds, Plan, PlanStep, Relocation, psi, unused_help
 from planners.robot import DEFAULT_POSE, add_robot
 from planners.skills import Robot, SkillResult
+from scenarios.psi import Holds, Plan, PlanStep, Relocation, psi, unused_help
 
 log = logging.getLogger(__name__)
 
@@ -85,9 +88,9 @@ def containers_of(world: World) -> dict[str, tuple[str, ...]]:
 class Assistant:
     """The robot in an apartment with the person: `after_tick` is the executor's hook."""
 
-    def __init__(self, predictor, window_min: int = 30, threshold: float | None = None, recording=None,
+    def __init__(self, predictor, window_min: int = DEFAULT_WINDOW_MIN, threshold: float | None = None, recording=None,
                  rng: np.random.Generator | None = None) -> None:
-        self.world = RecordedWorld(with_avatar=True, extras=[add_robot])
+        self.world = RecordedWorld(extras=[add_avatar, add_robot])
         self.world.recording = recording
         self.recording = recording
         self.executor = Executor(self.world, recording=recording)
@@ -279,12 +282,13 @@ class Assistant:
         self.recording.log_scene_graph(predicted, routine_minute=minute + self.window_min, entity="graph/predicted")
 
 
-def run_assisted(assistant: Assistant, entries, scripts, physics_rng: np.random.Generator,
-                 end_min: float | None = None) -> AssistLog:
-    """Live the day `entries` with the robot's help; returns the robot's log with the person's day in it. An action
-    the person cannot carry out (the robot left something in the way, say) ends the run; its reason is kept."""
+def run_assisted(assistant: Assistant, replay: Callable[..., DayLog], end_min: float | None = None) -> AssistLog:
+    """Live a day with the robot's help; returns the robot's log with the person's day in it. `replay` is the
+    day's `Generator.replay` with household, key and entries bound, so the assisted day is the reference day
+    by construction. An action the person cannot carry out (the robot left something in the way, say) ends the
+    run; its reason is kept."""
     try:
-        assistant.executor.run_day(entries, scripts, physics_rng, after_tick=assistant.after_tick, end_min=end_min)
+        replay(executor=assistant.executor, after_tick=assistant.after_tick, end_min=end_min)
     except HomerError as error:
         assistant.log.error = str(error)
         assistant._event(f"the person could not go on: {error}", assistant.executor.minute, "ERROR")

@@ -22,13 +22,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from homer_sim import __version__
-from homer_sim.dataset import Dataset, DatasetMeta, day_path, write_day, write_meta
-from homer_sim.households import ACTIVITIES, HOURS, OPTIONAL, Household
+from homer_sim.clock import DEFAULT_WINDOW_MIN, HOURS_PER_DAY
+from homer_sim.data.dataset import Dataset, DatasetMeta, day_path, write_day, write_meta
+from homer_sim.days import DayKey
+from homer_sim.person.households import ACTIVITIES, OPTIONAL, Household
 
 log = logging.getLogger(__name__)
 
 HOUSEHOLD = "breakfast_only"
-BREAKFAST_HABIT = (0.0, 1.0) + (0.0,) * (HOURS - 2)  # starts at 07:00; its length (16-28 min) varies
+BREAKFAST_HABIT = (0.0, 1.0) + (0.0,) * (HOURS_PER_DAY - 2)  # starts at 07:00; its length (16-28 min) varies
 CACHE_ENV = "HOMER_SIM_CACHE"
 
 
@@ -40,7 +42,7 @@ class DataSpec:
     test_days: int = 2
     seed: int = 0
     method: str = "markov"  # the graph network trains at ~50 s per epoch on 2 shared cores: too slow for a demo
-    window_min: int = 30
+    window_min: int = DEFAULT_WINDOW_MIN
     household: str = HOUSEHOLD  # or one of the project's households (a full assisted day)
 
 
@@ -100,7 +102,7 @@ clear it that is not mid-meal (with the packaged scripts the person clears up th
 
 def breakfast_household(variant: int = 0) -> Household:
     """Breakfast (script `variant` of the library; `make_generator` adds BREAKFAST_SCRIPT) and nothing else."""
-    habits = {a: (0.0,) * HOURS for a in ACTIVITIES}
+    habits = {a: (0.0,) * HOURS_PER_DAY for a in ACTIVITIES}
     habits["breakfast"] = BREAKFAST_HABIT
     variants = {a: 0 for a in ACTIVITIES} | {"breakfast": variant}
     return Household(HOUSEHOLD, "Only breakfast, at 07:00.", habits, variants, OPTIONAL)
@@ -116,9 +118,9 @@ def cache_root() -> Path:
 
 def make_generator(recording=None):
     """The project's day generator with the breakfast household added to its households."""
-    from homer_sim.aliases import Resolver
-    from homer_sim.generate import Generator, Sources
-    from homer_sim.scripts import parse_script
+    from homer_sim.data.generate import Generator, Sources
+    from homer_sim.person.aliases import Resolver
+    from homer_sim.person.scripts import parse_script
 
     generator = Generator(Sources(), recording=recording)
     script = parse_script(BREAKFAST_SCRIPT, "scenarios/breakfast_data.py", "breakfast", "demo",
@@ -145,7 +147,7 @@ def ensure_dataset(generator, spec: DataSpec) -> tuple[Dataset, float]:
     started = time.perf_counter()
     house = spec.household
     meta = generator.meta([house], {"generator": {"seed": spec.seed, "household": house, "homer_sim": __version__}})
-    h_index = 0 if house == HOUSEHOLD else list(generator.households).index(house)  # as `homer generate` seeds
+    h_index = 0 if house == HOUSEHOLD else list(generator.households).index(house)  # as `homer generate` numbers
     if not (folder / "meta.json").is_file():
         write_meta(folder, meta)
     made = 0
@@ -153,7 +155,7 @@ def ensure_dataset(generator, spec: DataSpec) -> tuple[Dataset, float]:
         for index in range(count):
             if day_path(folder, house, split, index).exists():
                 continue
-            day, info = generator.simulate(house, h_index, split, index, spec.seed)
+            day, info = generator.simulate(house, DayKey(spec.seed, h_index, split, index))
             write_day(folder, day)
             made += 1
             log.info("%s dataset: %s day %d in %.1f s", house, split, index, info["wall_s"])

@@ -1,1 +1,2 @@
-"""Dataset code: importers of external data (HOMER+)."""
+"""The data: day files and their format, dataset generation (the person's days simulated and observed), and
+dataset statistics."""

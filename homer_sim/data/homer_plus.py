@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from homer_sim.dataset import GRID_MIN, SPLITS, Dataset, DatasetError, DatasetMeta, Day, write_day, write_meta
+from homer_sim.data.dataset import GRID_MIN, SPLITS, Dataset, DatasetError, DatasetMeta, Day, write_day, write_meta
 from homer_sim.graph import NONE, ON, GraphError, validate_in_tree
 
 UPSTREAM_FOLDER = "processed_seqLM_coarse"

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from homer_sim.dataset import DatasetMeta, Day
+from homer_sim.data.dataset import DatasetMeta, Day
 from model.analogs import Analogs
 from model.markov import TimedMarkov
 from model.methods import load_predictor, save_predictor

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from model.cli import register
 from model.synthetic import write_synthetic_dataset
+from scenarios.cli.model import add_commands as register
 
 
 @pytest.fixture(scope="module")

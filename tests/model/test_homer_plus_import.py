@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 import torch
 
-from homer_sim.cli import main
+from homer_sim.data.dataset import Dataset, DatasetError
 from homer_sim.data.homer_plus import import_household
-from homer_sim.dataset import Dataset, DatasetError
+from scenarios.cli.main import main
 
 SHARED = Path(os.environ.get("HOMER_SIM_SHARED", Path(__file__).resolve().parents[3] / "shared")) / "homer_plus"
 ARCHIVE = SHARED / "HouseholdA.tar.gz"

@@ -1,0 +1,187 @@
+"""Where objects go: places in world coordinates and free spots on them.
+
+The start layout is packed deterministically (front row first, left to right); the avatar and robot later
+sample free spots with an explicit random generator. No mujoco here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+
+from homer_sim.errors import LayoutError
+from homer_sim.graph import INSIDE, ON
+from homer_sim.home.catalog import CATALOG, ObjectClass
+from homer_sim.home.furniture import Place, footprint, furniture_geometry, local_to_world
+from homer_sim.home.layout import Furniture, Layout, ObjectDecl
+
+SPOT_GAP = 0.025  # m between neighbouring objects
+SPAWN_LIFT = 0.001  # m above the surface an object is spawned
+
+
+@dataclass(frozen=True)
+class StartPose:
+    """Body pose of an object at spawn: position in m (world), quaternion wxyz."""
+
+    name: str
+    pos: tuple[float, float, float]
+    quat: tuple[float, float, float, float]
+
+
+def base_height(layout: Layout, f: Furniture) -> float:
+    """World z of the base of `f` (0 on the floor, the top of the furniture it stands on)."""
+    if f.on is None:
+        return 0.0
+    return base_height(layout, layout.furniture_by_name()[f.on]) + layout.furniture_by_name()[f.on].size[2]
+
+
+def yaw_quat(yaw: float) -> tuple[float, float, float, float]:
+    return (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+
+
+def _obstacles_on(layout: Layout, f: Furniture) -> list[tuple[float, float, float, float]]:
+    """Place-frame (x0, y0, x1, y1) rectangles of furniture standing on `f`."""
+    rects = []
+    for other in layout.furniture:
+        if other.on == f.name:
+            x0, y0, x1, y1 = footprint(other)
+            corners = np.array([[x0, y0], [x1, y1]])
+            local = _world_to_local_xy(f, corners)
+            rects.append((local[:, 0].min(), local[:, 1].min(), local[:, 0].max(), local[:, 1].max()))
+    return rects
+
+
+def _world_to_local_xy(f: Furniture, xy: np.ndarray) -> np.ndarray:
+    c, s = math.cos(f.yaw), math.sin(f.yaw)
+    dx, dy = xy[:, 0] - f.pos[0], xy[:, 1] - f.pos[1]
+    return np.stack([c * dx + s * dy, -s * dx + c * dy], axis=1)
+
+
+def _overlaps(a: tuple, b: tuple, gap: float) -> bool:
+    return a[0] < b[2] + gap and b[0] < a[2] + gap and a[1] < b[3] + gap and b[1] < a[3] + gap
+
+
+def lengthwise(f: Furniture, place: Place, cls: ObjectClass) -> bool:
+    """Whether an object on `place` of `f` stands lengthwise (its x front to back, like books on a shelf):
+    a long object inside a cabinet, which keeps its narrow side to the open front and leaves room beside it."""
+    return f.kind == "cabinet" and place.relation == INSIDE and cls.size[0] > cls.size[1]
+
+
+def stored_yaw(f: Furniture, place: Place, cls: ObjectClass) -> float:
+    """Yaw (rad, world) of an object put on `place` of `f`: its x along the furniture's width, or front to
+    back if it stands `lengthwise`."""
+    return f.yaw + (0.0 if lengthwise(f, place, cls) else math.pi / 2)
+
+
+def pack_spot(place: Place, cls: ObjectClass, taken: list[tuple], step: float = 0.01,
+              lengthwise: bool = False, centre_first: bool = False) -> tuple[float, float] | None:
+    """First free (x, y) in the place frame for an object whose width (its x) runs along the place's y, or
+    along its x (the depth) if `lengthwise`.
+
+    Scans from the front edge backwards, left to right (-y first) or, if `centre_first`, from the middle out;
+    None if the object does not fit.
+    """
+    if cls.size[2] > place.clearance - 0.005:
+        return None
+    half_y, half_x = cls.size[0] / 2, cls.size[1] / 2  # along place y (width) and x (depth)
+    if lengthwise:
+        half_y, half_x = half_x, half_y
+    cx, cy, _ = place.center
+    hx, hy = place.half_xy
+    if half_x > hx or half_y > hy:
+        return None
+    for x in np.arange(cx + hx - half_x, cx - hx + half_x - 1e-9, -step):
+        ys = np.arange(cy - hy + half_y, cy + hy - half_y + 1e-9, step)
+        for y in ys[np.argsort(np.abs(ys - cy), kind="stable")] if centre_first else ys:
+            rect = (x - half_x, y - half_y, x + half_x, y + half_y)
+            if not any(_overlaps(rect, t, SPOT_GAP) for t in taken):
+                taken.append(rect)
+                return float(x), float(y)
+    return None
+
+
+def _candidate_places(f: Furniture, decl: ObjectDecl) -> list[tuple[int, Place]]:
+    places = list(enumerate(furniture_geometry(f).places))
+    if decl.level is not None:
+        if not 0 <= decl.level < len(places):
+            raise LayoutError(f"{decl.name}: {f.name} has no place level {decl.level} (it has {len(places)})")
+        places = [places[decl.level]]
+    matching = [(k, p) for k, p in places if p.relation == decl.relation]
+    if not matching:
+        relation = "INSIDE" if decl.relation == INSIDE else "ON"
+        raise LayoutError(f"{decl.name}: cannot be {relation} {f.name} ({f.cls} has no such place"
+                          f"{'' if decl.level is None else f' at level {decl.level}'})")
+    return matching
+
+
+def start_poses(layout: Layout) -> dict[str, StartPose]:
+    """Spawn pose of every declared object, packed onto its parent's places; raises LayoutError if one does not fit."""
+    return dict(_start_poses_cached(layout))
+
+
+@cache
+def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
+    furniture = layout.furniture_by_name()
+    taken: dict[tuple[str, int], list[tuple]] = {}
+    poses: dict[str, StartPose] = {}
+    rooms = set(layout.room_names())
+    for decl in layout.objects:
+        cls = CATALOG[decl.cls]
+        if decl.parent in rooms:
+            if decl.at is None:
+                raise LayoutError(f"{decl.name}: an object on the floor of {decl.parent} needs `at` (x, y)")
+            poses[decl.name] = StartPose(decl.name, (*decl.at, cls.size[2] / 2 + SPAWN_LIFT), yaw_quat(0.0))
+            continue
+        if decl.parent in poses:
+            below = poses[decl.parent]
+            z = below.pos[2] + CATALOG[_decl(layout, decl.parent).cls].size[2] / 2 + cls.size[2] / 2 + SPAWN_LIFT
+            poses[decl.name] = StartPose(decl.name, (below.pos[0], below.pos[1], z), below.quat)
+            continue
+        f = furniture[decl.parent]
+        for k, place in _candidate_places(f, decl):
+            spots = taken.setdefault((f.name, k), list(_obstacles_on(layout, f)))
+            long = lengthwise(f, place, cls)
+            # in a cabinet the first declared (the everyday things) stand front and centre, where a hand reaches
+            # past the open door and the side walls
+            spot = pack_spot(place, cls, spots, lengthwise=long, centre_first=f.kind == "cabinet")
+            if spot is None and f.kind == "cabinet":  # what does not fit beside them packs from the side
+                spot = pack_spot(place, cls, spots, lengthwise=long)
+            if spot is not None:
+                world = local_to_world(f, np.array([spot[0], spot[1], place.center[2]]), base_height(layout, f))
+                pos = (float(world[0]), float(world[1]), float(world[2] + cls.size[2] / 2 + SPAWN_LIFT))
+                poses[decl.name] = StartPose(decl.name, pos, yaw_quat(stored_yaw(f, place, cls)))
+                break
+        else:
+            raise LayoutError(f"{decl.name}: does not fit on any place of {f.name} (size {cls.size} m)")
+    return tuple(poses.items())
+
+
+def _decl(layout: Layout, name: str) -> ObjectDecl:
+    return next(o for o in layout.objects if o.name == name)
+
+
+def place_world(layout: Layout, f: Furniture, place: Place, opened: bool = False) -> dict:
+    """World description of a place: surface z, rectangle corners (x0, y0, x1, y1) and centre, all m.
+
+    With `opened`, a drawer place is shown pulled out to the end of its travel.
+    """
+    shift = 0.0
+    if opened and place.part is not None:
+        part = next(p for p in furniture_geometry(f).parts if p.name == place.part)
+        shift = part.range[1]
+    cx, cy, z = place.center
+    hx, hy = place.half_xy
+    corners = np.array([[cx + shift + sx * hx, cy + sy * hy, z] for sx in (-1, 1) for sy in (-1, 1)])
+    world = local_to_world(f, corners, base_height(layout, f))
+    return {
+        "z": float(world[0, 2]),
+        "rect": (world[:, 0].min(), world[:, 1].min(), world[:, 0].max(), world[:, 1].max()),
+        "center": world[:, :2].mean(axis=0),
+    }
+
+
+__all__ = ["ON", "INSIDE", "StartPose", "start_poses", "pack_spot", "stored_yaw", "place_world", "base_height",
+           "yaw_quat"]

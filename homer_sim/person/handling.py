@@ -1,0 +1,348 @@
+"""How the person handles things: grasping, carrying, putting down, opening and closing, in physics.
+
+`Handling` is the half of the executor that touches objects and articulations; `homer_sim.person.executor.Executor`
+adds the day, walking and script dispatch. Grasps weld an object to a hand at its current relative pose and
+lift it with physics; placements release it at a sampled free spot where it settles; doors and drawers move
+along minimum-jerk paths with physics stepping in between.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import mujoco
+import numpy as np
+
+from homer_sim.errors import PhysicsError
+from homer_sim.graph import INSIDE, ON
+from homer_sim.home.catalog import CATALOG
+from homer_sim.home.placement import yaw_quat
+from homer_sim.home.spots import PlacementError, Spot
+from homer_sim.person.avatar import AvatarError, compose, relative_pose
+
+log = logging.getLogger(__name__)
+
+LIFT_M, LIFT_STEPS = 0.06, 30
+SETTLE_S = 3.0
+DRIVE_PROFILE = {"hinge": (16, 5), "slide": (25, 6)}  # increments, physics steps per increment
+DRIVE_REST_STEPS = 10
+OPEN_ENOUGH = 0.9
+
+
+class DoorBlocked(AvatarError):
+    """A door the person swings touches an object (`blocker`) and stops there."""
+
+    def __init__(self, message: str, blocker: str) -> None:
+        super().__init__(message)
+        self.blocker = blocker
+
+
+class Handling:
+    """Grasping, placing and articulations; mixed into the Executor, whose state it uses (world, avatar,
+    spots, observer, rng, the observed graph) and whose walking (`go`) and observing (`observe`) it calls."""
+
+    # --- physics helpers --------------------------------------------------------------------------------
+    def step(self, n: int) -> None:
+        self.world.step(n)
+        if self.recording is not None:
+            self.recording.log_body_poses(self.world.data)
+
+    def settle(self) -> None:
+        start = self.world.data.time
+        while self.world.data.time - start < SETTLE_S:
+            self.step(25)
+            if np.all(self.world.objects_at_rest()):
+                break
+        self.check_inside()
+
+    def check_inside(self) -> None:
+        pos = self.world.object_positions()
+        if np.isnan(pos).any() or (pos[:, 2] < -0.3).any():
+            name = self.world.object_names[int(np.argmin(np.nan_to_num(pos[:, 2], nan=-9)))]
+            raise PhysicsError(f"{name} fell out of the apartment (z = {pos[:, 2].min():.2f} m)")
+
+    def drive(self, art, openness: float) -> None:
+        """Move a door or drawer to `openness` along a minimum-jerk path, the hand on its handle.
+
+        The joint is moved kinematically in small increments with physics steps in between, so whatever the
+        part touches is pushed and a drawer carries its contents along by friction.
+        """
+        model, data = self.world.model, self.world.data
+        lo, hi = art.range
+        start, target = data.qpos[art.qpos_adr], lo + openness * (hi - lo)
+        increments, steps = DRIVE_PROFILE[art.joint_type]
+        dt = steps * model.opt.timestep
+        handle = model.site(f"{art.name}/handle").id
+        hand = self.avatar.free_hand()  # with both hands full the person pushes it with an elbow
+        previous = start
+        for i in range(1, increments + 1):
+            s = i / increments
+            q = start + (target - start) * (10 * s**3 - 15 * s**4 + 6 * s**5)
+            data.qpos[art.qpos_adr] = q
+            data.qvel[art.dof_adr] = (q - previous) / dt + 1e-9  # nonzero: the tree stays awake
+            previous = q
+            self.step(steps)
+            blocker = self._door_blocked(art) if art.joint_type == "hinge" else None
+            if blocker is not None:
+                data.qpos[art.qpos_adr], data.qvel[art.dof_adr] = q - (q - start) / i, 0.0
+                raise DoorBlocked(f"{art.name} is blocked by {blocker} at openness "
+                                  f"{self.world.openness(art.name):.2f}", blocker)
+            if hand is not None:
+                self.avatar.set_hand(hand, data.site_xpos[handle], follow=False)
+        data.qpos[art.qpos_adr], data.qvel[art.dof_adr] = target, 0.0
+        self.step(DRIVE_REST_STEPS)
+        self.settle()  # what the part carried or pushed comes to rest
+        if hand is not None:
+            self.avatar.set_hand(hand, self.avatar.hand_home(hand), follow=False)
+
+    def _door_blocked(self, art) -> str | None:
+        """The object a swinging door touches, if any (a door never shoves things out of its way)."""
+        model, data = self.world.model, self.world.data
+        if data.ncon == 0:
+            return None
+        door = model.jnt_bodyid[art.joint_id]
+        bodies = model.geom_bodyid[data.contact.geom]
+        for a, b in bodies:
+            other = b if a == door else a if b == door else None
+            if other is not None and other in self._object_of_body:
+                return self._object_of_body[other]
+        return None
+
+    # --- containers -------------------------------------------------------------------------------------
+    def part_holding(self, furniture: str, point: np.ndarray | None) -> list:
+        """The articulations of `furniture` that must be open to reach `point` (all hinge doors; the drawer
+        whose interior contains the point)."""
+        parts = self.parts.get(furniture, [])
+        doors = [a for a in parts if a.joint_type == "hinge"]
+        if doors or point is None:
+            return doors
+        model, data = self.world.model, self.world.data
+        for art in parts:
+            body = model.jnt_bodyid[art.joint_id]
+            for site in range(model.nsite):
+                if model.site_bodyid[site] == body and "/interior_" in model.site(site).name:
+                    local = data.site_xmat[site].reshape(3, 3).T @ (point - data.site_xpos[site])
+                    if np.all(np.abs(local) <= model.site_size[site] + 0.02):
+                        return [art]
+        return []
+
+    def ensure_open(self, parts: list, opened: list) -> None:
+        """Open each part that is not open enough; an object in a door's way is set aside first (once)."""
+        for art in parts:
+            if self.world.openness(art.name) < OPEN_ENOUGH:
+                try:
+                    self.drive(art, 1.0)
+                except DoorBlocked as blocked:
+                    self._set_aside(blocked)
+                    self.drive(art, 1.0)
+                opened.append(art)
+
+    def close_parts(self, parts: list) -> None:
+        """Close each part; an object sticking out into a door's way is pushed back in first (once)."""
+        for art in parts:
+            if self.world.openness(art.name) > 0.02:
+                try:
+                    self.drive(art, 0.0)
+                except DoorBlocked as blocked:
+                    self._push_back(blocked.blocker, art.name.split("/")[0], blocked)
+                    self.drive(art, 0.0)
+
+    def _push_back(self, name: str, furniture: str, blocked: DoorBlocked) -> None:
+        """Put `name` (in the way of a door of `furniture`) at a free spot inside it, as a person tidies a
+        toppled glass back onto its shelf before closing the cupboard; re-raises `blocked` if there is none."""
+        if name in self.avatar.carried():
+            raise blocked
+        exclude = set(self.carried_indices()) | {self.world.object_index(name)}
+        for index, _ in self.spots.places_of(furniture, INSIDE):
+            spot = self.spots.free_spot(name, furniture, index, self.rng, exclude)
+            if spot is not None:
+                log.debug("%s: pushed back into %s so the door closes", name, furniture)
+                self.world.set_object_pose(name, spot.pos, yaw_quat(spot.yaw))
+                self.settle()
+                return
+        raise blocked
+
+    def _set_aside(self, blocked: DoorBlocked) -> None:
+        """Move the object in the way of a door the person opens to a free floor spot nearby (it fell out, or
+        someone left it there); re-raises `blocked` if the person holds it or there is no room."""
+        name = blocked.blocker
+        room = self.world.layout.room_at(self.avatar.x, self.avatar.y)
+        if name in self.avatar.carried() or room is None:
+            raise blocked
+        exclude = set(self.carried_indices()) | {self.world.object_index(name)}
+        try:
+            spot = self.spots.floor_spot(name, room, (self.avatar.x, self.avatar.y), self.rng, exclude)
+        except PlacementError:
+            raise blocked from None
+        log.debug("%s: set aside so a door opens", name)
+        self.world.set_object_pose(name, spot.pos)
+        self.settle()
+
+    # --- hands ------------------------------------------------------------------------------------------
+    def grab(self, name: str) -> None:
+        """Take `name` into a free hand (opening its container if closed), lifting it and what rests on it."""
+        if name in self.avatar.carried():
+            return
+        hand = self.avatar.free_hand()
+        if hand is None:
+            raise AvatarError(f"cannot grab {name}: both hands hold {', '.join(self.avatar.held.values())}")
+        self.go(name)
+        container = self.anchor(name)
+        opened: list = []
+        if self._graph.relation_of(name) == "INSIDE" or container in self.parts:
+            self.ensure_open(self.part_holding(container, self.world.object_pose(name)[0]), opened)
+        pos, quat = self.world.object_pose(name)
+        self._grabbed_from[name] = (pos.copy(), quat.copy(), container)
+        self.grabbed_at[name] = self.minute
+        riders = [c for c in self._graph.children_of(name) if c in self.movable and c not in self.avatar.carried()]
+        hand_body = self.avatar.hands[hand]
+        self.avatar.set_hand(hand, pos, follow=False)
+        mujoco.mj_kinematics(self.world.model, self.world.data)
+        for item in [name, *riders]:
+            self.avatar.weld(item, hand_body)
+            self.world.set_object_pose(item, *self.world.object_pose(item), forward=False)
+        for k in range(LIFT_STEPS):
+            self.avatar.set_hand(hand, pos + np.array([0.0, 0.0, LIFT_M * (k + 1) / LIFT_STEPS]), follow=False)
+            self.step(1)
+        for item in [name, *riders]:
+            self.avatar.set_collisions(item, False)
+        self.avatar.held[hand] = name
+        self.avatar.riders[name] = riders
+        self.avatar.set_hand(hand, self.avatar.hand_home(hand), follow=True)
+        self.close_parts(opened)
+
+    def release(self, name: str, spot: Spot) -> None:
+        """Put a held object (and its riders) at `spot` and let it settle."""
+        hand = self.avatar.hand_of(name)
+        riders = self.avatar.riders.pop(name, [])
+        pos, quat = self.world.object_pose(name)
+        rel = {r: relative_pose(pos, quat, *self.world.object_pose(r)) for r in riders}
+        target_quat = np.array(yaw_quat(spot.yaw))
+        for item in [name, *riders]:
+            self.avatar.unweld(item)
+            self.avatar.set_collisions(item, True)
+        self.world.set_object_pose(name, spot.pos, target_quat, forward=False)
+        for rider, (rp, rq) in rel.items():
+            self.world.set_object_pose(rider, *compose(np.array(spot.pos), target_quat, rp, rq), forward=False)
+        if hand is not None:
+            self.avatar.held[hand] = None
+            self.avatar.set_hand(hand, spot.pos, follow=False)
+        self.world.set_object_pose(name, spot.pos, target_quat)
+        self.settle()
+        if hand is not None:
+            self.avatar.set_hand(hand, self.avatar.hand_home(hand), follow=False)
+
+    def ensure_held(self, name: str) -> None:
+        if name in self.avatar.worn:
+            self.take_off(name)
+        elif self.avatar.hand_of(name) is None:
+            self.grab(name)
+
+    # --- placing ----------------------------------------------------------------------------------------
+    def put(self, name: str, target: str, relation: int | None) -> None:
+        """Put `name` ON/INSIDE `target` (relation None: as the target is built: inside a container)."""
+        self.ensure_held(name)
+        exclude = set(self.carried_indices())
+        if target in self.rooms:
+            if self.world.layout.room_at(self.avatar.x, self.avatar.y) != target:
+                self.go(target)
+            spot = self.spots.floor_spot(name, target, (self.avatar.x, self.avatar.y), self.rng, exclude)
+            self.release(name, spot)
+        elif target in self.movable:
+            self.go(target)
+            self.release(name, self._on_object(name, target))
+        else:
+            self.put_nearby(name, target, relation)
+        self.observe()
+
+    def _on_object(self, name: str, target: str) -> Spot:
+        """A spot on (or in) object `target`, above whatever already lies there."""
+        pos = self.world.object_pose(target)[0]
+        x, y = pos[:2] + self.rng.uniform(-0.01, 0.01, size=2)
+        z = self.spots.landing_z(name, (x, y), pos[2] + self._cls(target).size[2] / 2 + 0.3)
+        return Spot((float(x), float(y), z), 0.0, target, None)
+
+    def _put_on_furniture(self, name: str, target: str, relation: int | None, exclude: set[int]) -> None:
+        places = self.spots.places_of(target, relation)
+        if not places:
+            raise PlacementError(f"{target} has no place to put {name}")
+        start_level = next((o.level for o in self.world.layout.objects if o.name == name and o.parent == target), None)
+        order = [places[i] for i in self.rng.permutation(len(places))]
+        order.sort(key=lambda kp: kp[0] != start_level)
+        self.go(target)
+        for index, place in order:
+            opened: list = []
+            if place.relation == INSIDE or place.part is not None:
+                needed = [a for a in self.parts.get(target, []) if a.joint_type == "hinge" or
+                          a.name.endswith("/" + (place.part or ""))]
+                self.ensure_open(needed, opened)
+            spot = self.spots.free_spot(name, target, index, self.rng, exclude)
+            if spot is not None:
+                self.release(name, spot)
+                self.close_parts(opened)
+                return
+            self.close_parts(opened)
+        raise PlacementError(f"no free spot for {name} on {target}")
+
+    def put_nearby(self, name: str, target: str, relation: int | None) -> None:
+        """Put on `target`, or when it is full on the nearest furniture of the same room that has room (a
+        person puts the magazine on the shelf when the counter is full)."""
+        try:
+            self._put_on_furniture(name, target, relation, set(self.carried_indices()))
+            return
+        except PlacementError:
+            if relation == INSIDE:
+                raise
+        for other in self.spots.neighbours(target):
+            try:
+                self._put_on_furniture(name, other, ON, set(self.carried_indices()))
+                log.debug("%s: %s full, put on %s", name, target, other)
+                return
+            except PlacementError:
+                continue
+        raise PlacementError(f"no free spot for {name} on {target} or any furniture near it")
+
+    def put_back_where_grabbed(self, name: str) -> None:
+        """Back to the spot it was taken from if that is still free, else anywhere on the same furniture."""
+        self.ensure_held(name)
+        if name not in self._grabbed_from:
+            raise AvatarError(f"cannot put {name} back: it was not taken from anywhere today")
+        pos, quat, anchor = self._grabbed_from[name]
+        bottom = pos[2] - self._cls(name).size[2] / 2
+        z = self.spots.landing_z(name, (pos[0], pos[1]), pos[2] + 0.3)
+        if anchor in self.rooms or z - self._cls(name).size[2] / 2 > bottom + 0.01:
+            self.put(name, anchor, None)
+            return
+        self.go(anchor)
+        self.release(name, Spot((float(pos[0]), float(pos[1]), z), 2 * math.atan2(quat[3], quat[0]), anchor, None))
+        self.observe()
+
+    def wear(self, name: str) -> None:
+        self.ensure_held(name)
+        hand = self.avatar.hand_of(name)
+        self.avatar.unweld(name)
+        self.avatar.held[hand] = None
+        slot = len(self.avatar.worn)
+        c, s = math.cos(self.avatar.yaw), math.sin(self.avatar.yaw)
+        spot = np.array([self.avatar.x - 0.05 * c, self.avatar.y - 0.05 * s, 1.1 + 0.05 * slot])
+        self.world.set_object_pose(name, spot, self.world.object_pose(name)[1])
+        self.avatar.weld(name, self.avatar.root)
+        self.avatar.worn.append(name)
+
+    def take_off(self, name: str) -> None:
+        if self.avatar.hand_of(name) is not None:
+            return
+        if name not in self.avatar.worn:
+            raise AvatarError(f"cannot take off {name}: it is not worn")
+        hand = self.avatar.free_hand()
+        if hand is None:
+            raise AvatarError(f"cannot take off {name}: both hands are full")
+        self.avatar.unweld(name)
+        self.avatar.worn.remove(name)
+        self.world.set_object_pose(name, self.avatar.hand_home(hand), self.world.object_pose(name)[1])
+        self.avatar.weld(name, self.avatar.hands[hand])
+        self.avatar.held[hand] = name
+
+    def _cls(self, name: str):
+        return CATALOG[self.world.layout.objects[self.world.object_index(name)].cls]

@@ -1,0 +1,133 @@
+"""`homer generate`, `homer dataset stats`, `homer simulate-day`, `homer compat-check`: the person's days as data."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from homer_sim.clock import clock_text
+from homer_sim.days import DayKey
+from homer_sim.errors import HomerError
+from scenarios.cli.common import emit
+
+
+def cmd_generate(args: argparse.Namespace) -> int:
+    from homer_sim.data.generate import Sources, generate
+
+    for name in ("households", "train_days", "test_days", "workers"):
+        if getattr(args, name) < (1 if name in ("households", "workers") else 0):
+            raise HomerError(f"--{name.replace('_', '-')} must be positive, not {getattr(args, name)}")
+    sources = Sources(str(args.habits) if args.habits else None, str(args.scripts) if args.scripts else None)
+    result = generate(args.out, args.households, args.train_days, args.test_days, args.seed, args.workers, sources,
+                      progress=not args.json)
+    emit(result, args.json, [f"wrote {result['days_written']} days for {', '.join(result['households'])} "
+                               f"to {result['out']} in {result['wall_s']} s"])
+    return 0
+
+def cmd_dataset_stats(args: argparse.Namespace) -> int:
+    from homer_sim.data.stats import dataset_stats
+
+    result = dataset_stats(args.data)
+    lines = [f"{'household':<14} {'days':>5} {'steps/day':>10} {'moves/day':>10} {'objects used':>13}"]
+    for name, h in result["households"].items():
+        lines.append(f"{name:<14} {h['days']:>5} {h['steps_per_day']:>10.1f} {h['moves_per_day']:>10.1f} "
+                     f"{h['objects_used']:>13}")
+    wall = result["wall_s_per_day"]
+    lines.append(f"wall seconds per simulated day: {wall:.2f}" if wall is not None else "no generation log")
+    emit(result, args.json, lines)
+    return 0
+
+def cmd_simulate_day(args: argparse.Namespace) -> int:
+    from homer_sim.data.generate import Generator, Sources
+    from homer_sim.recording import Recording
+
+    recording = Recording(args.rrd) if args.rrd else None
+    generator = Generator(Sources(), recording=recording)
+    if recording is not None:
+        recording.log_geometry(generator.world.model, generator.world.data)
+    names = list(generator.households)
+    if args.household not in names:
+        from homer_sim.errors import unknown_name
+
+        raise unknown_name("household", args.household, names)
+    key = DayKey(args.seed, names.index(args.household), args.split, args.day)
+    day, info = generator.simulate(args.household, key)
+    if recording is not None:
+        recording.close()
+    moves = int(((day.parent[1:] != day.parent[:-1])).sum())
+    result = {"household": args.household, "steps": day.steps, "grid_moves": moves, "schedule": day.schedule,
+              "events": len(day.moves), "attempts": info["attempts"], "wall_s": info["wall_s"],
+              "rrd": str(args.rrd) if args.rrd else None}
+    lines = [f"{a:<22} {clock_text(s)}-{clock_text(e)}"
+             for a, s, e in day.schedule]
+    lines.append(f"{day.steps} grid steps, {moves} object moves between steps, {info['wall_s']} s wall")
+    emit(result, args.json, lines)
+    return 0
+
+def cmd_compat_check(args: argparse.Namespace) -> int:
+    from homer_sim.person.compat import compat_check
+
+    result = compat_check(args.scripts, progress=not args.json)
+    share = result["executed"] / result["scripts"]
+    lines = [f"{result['executed']} of {result['scripts']} scripts executed ({share:.0%})"]
+    lines += [f"  {f['script']}:{f['line']}: {f['reason']}" for f in result["failures"]]
+    emit(result, args.json, lines)
+    return 0
+
+
+def cmd_import_homer_plus(args: argparse.Namespace) -> int:
+    from homer_sim.data.homer_plus import import_household
+
+    result = import_household(args.path, args.out, args.name)
+    emit(result, args.json, [f"{k}: {v}" for k, v in result.items()])
+    return 0
+
+
+def add_commands(subparsers: argparse._SubParsersAction) -> None:
+    """Add `generate`, `dataset stats`, `simulate-day`, `compat-check` and `import homer-plus` to the parser."""
+    gen = subparsers.add_parser("generate", help="simulate households' days into a HOMER-like dataset")
+    gen.add_argument("--households", type=int, default=5, help="how many households (5)")
+    gen.add_argument("--train-days", type=int, default=50, help="training days per household (50)")
+    gen.add_argument("--test-days", type=int, default=10, help="test days per household (10)")
+    gen.add_argument("--seed", type=int, default=0, help="dataset seed (0)")
+    gen.add_argument("--out", type=Path, required=True, help="dataset folder (created; an interrupted run resumes)")
+    gen.add_argument("--workers", type=int, default=1, help="worker processes (1); bytes do not depend on it")
+    gen.add_argument("--habits", type=Path, default=None,
+                     help="households from a HOMER personaBasedSchedules folder instead of ours")
+    gen.add_argument("--scripts", type=Path, default=None,
+                     help="activity scripts from a folder laid out <activity>/<name>.txt instead of ours")
+    gen.add_argument("--json", action="store_true", help="print one JSON object (no progress bar)")
+    gen.set_defaults(func=cmd_generate)
+
+    dataset = subparsers.add_parser("dataset", help="inspect a dataset")
+    dataset_commands = dataset.add_subparsers(dest="dataset_command", required=True, metavar="DATASET_COMMAND")
+    stats = dataset_commands.add_parser("stats", help="steps, moves and objects used per household")
+    stats.add_argument("data", type=Path, help="dataset folder")
+    stats.add_argument("--json", action="store_true", help="print one JSON object")
+    stats.set_defaults(func=cmd_dataset_stats)
+
+    day = subparsers.add_parser("simulate-day", help="simulate one day of one household, recorded with rerun")
+    day.add_argument("--household", default="household_a", help="household name (household_a)")
+    day.add_argument("--seed", type=int, default=0, help="seed (0)")
+    day.add_argument("--day", type=int, default=0, help="day index (0)")
+    day.add_argument("--split", choices=("train", "test"), default="train")
+    day.add_argument("--rrd", type=Path, default=None, help="write a rerun recording of the day here")
+    day.add_argument("--json", action="store_true", help="print one JSON object")
+    day.set_defaults(func=cmd_simulate_day)
+
+    compat = subparsers.add_parser("compat-check", help="run every script of a HOMER-style folder in our apartment")
+    compat.add_argument("--scripts", type=Path, required=True, help="folder laid out <activity>/<name>.txt")
+    compat.add_argument("--json", action="store_true", help="print one JSON object")
+    compat.set_defaults(func=cmd_compat_check)
+
+    imports = subparsers.add_parser("import", help="convert external data into a homer-sim dataset")
+    import_commands = imports.add_subparsers(dest="import_command", required=True, metavar="FORMAT")
+    homer_plus = import_commands.add_parser(
+        "homer-plus", help="one HOMER+ household (HouseholdX/processed_seqLM_coarse) -> dataset folder",
+        description="Read common_data.json, train/*.pt and test/*.pt (weights only) of one household and write it "
+        "into DIR, keeping the upstream train/test split; a DIR holding other HOMER+ households gains this one.")
+    homer_plus.add_argument("path", type=Path, help="the unpacked HouseholdX folder (or its processed_seqLM_coarse)")
+    homer_plus.add_argument("--out", type=Path, required=True, help="dataset folder to create or extend")
+    homer_plus.add_argument("--name", default=None, help="household name in the dataset (default: the folder's)")
+    homer_plus.add_argument("--json", action="store_true", help="print one JSON object")
+    homer_plus.set_defaults(func=cmd_import_homer_plus)

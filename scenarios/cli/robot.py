@@ -1,0 +1,48 @@
+"""`homer grasp-suite`: the robot's regression suite."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from planners.grasp_suite import (
+    DEFAULT_TRIALS,
+    HOLD_SECONDS,
+    MAX_SLIP,
+    MIN_LIFT,
+    QUICK_TRIALS,
+    TARGET_CLASS,
+    TARGET_OVERALL,
+    chosen_classes,
+    format_table,
+    run_suite,
+)
+from scenarios.cli.common import positive_int
+
+
+def add_commands(subparsers: argparse._SubParsersAction) -> None:
+    """Add the `grasp-suite` subcommand to the `homer` parser's subparsers."""
+    suite = subparsers.add_parser(
+        "grasp-suite", help="pick every graspable object class from randomised start poses",
+        description=f"Pick each robot-graspable object class of the apartment from randomised start poses on "
+        f"its home surface or shelf; success: lifted {MIN_LIFT * 100:.0f} cm and held {HOLD_SECONDS:.0f} s with "
+        f"slip under {MAX_SLIP * 1000:.0f} mm. Exit status 1 when the overall rate is below {TARGET_OVERALL} or a "
+        f"class is below {TARGET_CLASS}.")
+    suite.add_argument("--quick", action="store_true", help="one class of each shape family (fast subset)")
+    suite.add_argument("--trials", type=positive_int, default=None,
+                       help=f"trials per class ({DEFAULT_TRIALS}; {QUICK_TRIALS} with --quick)")
+    suite.add_argument("--seed", type=int, default=0, help="seed of the start-pose randomisation (0)")
+    suite.add_argument("--classes", nargs="+", metavar="CLASS", help="only these object classes (default: all)")
+    suite.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
+    suite.add_argument("--json", action="store_true", help="print one JSON object")
+    suite.set_defaults(func=cmd_grasp_suite)
+
+
+def cmd_grasp_suite(args: argparse.Namespace) -> int:
+    result = run_suite(quick=args.quick, trials=args.trials, seed=args.seed, progress=not args.quiet,
+                       classes=chosen_classes(args.classes) if args.classes else None)
+    if args.json:
+        print(json.dumps(result))
+    else:
+        print(format_table(result))
+    return 0 if result["meets_targets"] else 1

@@ -1,0 +1,128 @@
+"""The paper's relocation metrics on hand-made sequences whose answers are worked out by hand.
+
+Nodes: 0 kitchen (room), 1 table, 2 shelf, 3 cup, 4 book (cup and book movable). Window: 3 steps (30 min).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from homer_sim.data.dataset import Day
+from model.evaluate import summarise
+from model.metrics import Counts, Queries, day_queries, first_change, gate, score, window_steps
+from model.predictor import ModelError, Rollout
+
+MOVABLE = np.array([False, False, False, True, True])
+ROOM, TABLE, SHELF, CUP, BOOK = range(5)
+START = np.array([-1, ROOM, ROOM, SHELF, SHELF])  # both objects on the shelf
+
+
+def _seq(cup: list[int], book: list[int]) -> np.ndarray:
+    """Parents at t + 1 .. t + 3: (1, 3, 5) with the furniture fixed."""
+    rows = [[-1, ROOM, ROOM, c, b] for c, b in zip(cup, book, strict=True)]
+    return np.array(rows)[None]
+
+
+def _score(true_cup: list[int], true_book: list[int], pred_cup: list[int], pred_book: list[int],
+           valid: int = 3) -> Counts:
+    queries = Queries(START[None], np.array([600.0]), _seq(true_cup, true_book), np.array([valid]))
+    return score(queries, _seq(pred_cup, pred_book), 3, MOVABLE)
+
+
+def test_correct_move_counts_whatever_its_timing_inside_the_window() -> None:
+    # cup goes to the table at t+1; predicted at t+2 -> correct. book stays and is predicted to stay.
+    counts = _score([TABLE] * 3, [SHELF] * 3, [SHELF, TABLE, TABLE], [SHELF] * 3)
+    assert counts == Counts(used_correct=1, unused_correct=1)
+
+
+def test_object_that_moves_and_comes_back_inside_the_window_is_used() -> None:
+    truth = ([TABLE, SHELF, SHELF], [SHELF] * 3)  # cup to the table, back to the shelf at t+2
+    assert _score(*truth, [SHELF] * 3, [SHELF] * 3) == Counts(used_missed=1, unused_correct=1)
+    assert _score(*truth, [TABLE] * 3, [SHELF] * 3) == Counts(used_correct=1, unused_correct=1)
+    assert _score(*truth, [ROOM] * 3, [SHELF] * 3) == Counts(used_wrong=1, unused_correct=1)
+
+
+def test_only_the_first_predicted_change_counts() -> None:
+    # predicted: cup to the floor (room) at t+1, then the table; truth: the table -> wrong, not correct.
+    assert _score([TABLE] * 3, [SHELF] * 3, [ROOM, TABLE, TABLE], [SHELF] * 3) == Counts(used_wrong=1,
+                                                                                        unused_correct=1)
+
+
+def test_a_predicted_move_of_an_unused_object_is_unused_wrong() -> None:
+    counts = _score([SHELF] * 3, [SHELF] * 3, [SHELF] * 3, [SHELF, TABLE, TABLE])
+    assert counts == Counts(unused_correct=1, unused_wrong=1)
+    assert counts.percentages()["unused"] == {"correct": 50.0, "wrong": 50.0}
+
+
+def test_a_true_move_after_the_window_leaves_the_object_unused() -> None:
+    # The cup moves at t+4, outside a 3-step window; predicting that move now is an unused wrong.
+    queries = Queries(START[None], np.array([600.0]), np.concatenate([_seq([SHELF] * 3, [SHELF] * 3),
+                                                                      _seq([TABLE], [SHELF])], axis=1), np.array([4]))
+    predicted = np.concatenate([_seq([TABLE] * 3, [SHELF] * 3), _seq([TABLE], [SHELF])], axis=1)
+    assert score(queries, predicted, 3, MOVABLE) == Counts(unused_correct=1, unused_wrong=1)
+    assert score(queries, predicted, 4, MOVABLE) == Counts(used_correct=1, unused_correct=1)
+
+
+def test_query_near_the_end_of_the_day_cuts_the_window_for_truth_and_prediction() -> None:
+    # A 4-step day: the cup moves to the table at the last step (3). The query at step 2 has 1 future step.
+    parents = np.array([START, START, START, [-1, ROOM, ROOM, TABLE, SHELF]])
+    day = Day("h", "test", 0, np.array([600, 610, 620, 630]), parents, np.ones_like(parents, dtype=np.int8))
+    queries = day_queries([day], 3)
+    assert len(queries) == 3 and queries.valid.tolist() == [3, 2, 1]
+    # Prediction for every query: cup to the table at t+1, book to the table at t+2 (past the end for query 2).
+    predicted = np.repeat(_seq([TABLE] * 3, [SHELF, TABLE, TABLE]), 3, axis=0)
+    counts = score(queries, predicted, 3, MOVABLE)
+    # Query 0 and 1: cup correct, book predicted to move within the day -> unused wrong.
+    # Query 2: cup correct; the book's predicted move at t+2 lies past the day's end -> unused correct.
+    assert counts == Counts(used_correct=3, unused_wrong=2, unused_correct=1)
+
+
+def test_first_change_reports_destination_and_respects_step_limits() -> None:
+    observed = np.array([[SHELF, SHELF]])
+    sequence = np.array([[[SHELF, TABLE], [ROOM, TABLE]]])
+    changed, destination = first_change(observed, sequence, np.array([1]))
+    assert changed.tolist() == [[False, True]] and destination.tolist() == [[-1, TABLE]]
+    changed, destination = first_change(observed, sequence, np.array([2]))
+    assert changed.tolist() == [[True, True]] and destination.tolist() == [[ROOM, TABLE]]
+
+
+def test_decision_rule_argmax_or_most_likely_other_parent_above_threshold() -> None:
+    # One step, one query. cup: stay 0.55, table 0.45. book: stay 0.3, table 0.7.
+    parent = np.array([[[-1, ROOM, ROOM, SHELF, TABLE]]])  # argmax per node
+    confidence = np.array([[[0.0, 1.0, 1.0, 0.55, 0.7]]], dtype=np.float32)
+    other = np.array([[[-1, ROOM, ROOM, TABLE, TABLE]]])  # best parent other than the observed shelf
+    other_confidence = np.array([[[0.0, 0.0, 0.0, 0.45, 0.7]]], dtype=np.float32)
+    rollout = Rollout(parent, confidence, other, other_confidence)
+    assert gate(rollout, START[None], 0.0).shape == (1, 1, 5)
+    assert gate(rollout, START[None], 0.0)[0, 0].tolist() == [-1, ROOM, ROOM, SHELF, TABLE]  # argmax
+    assert gate(rollout, START[None], 0.4)[0, 0].tolist() == [-1, ROOM, ROOM, TABLE, TABLE]  # 0.45 >= 0.4
+    assert gate(rollout, START[None], 0.6)[0, 0].tolist() == [-1, ROOM, ROOM, SHELF, TABLE]
+    assert gate(rollout, START[None], 0.8)[0, 0].tolist() == [-1, ROOM, ROOM, SHELF, SHELF]  # 0.7 < 0.8
+
+
+def test_unused_pool_restricts_unused_counts_to_the_given_objects() -> None:
+    queries = Queries(START[None], np.array([600.0]), _seq([SHELF] * 3, [SHELF] * 3), np.array([3]))
+    predicted = _seq([SHELF] * 3, [TABLE] * 3)
+    pool = np.array([False, False, False, True, False])  # only the cup is a used object of this household
+    assert score(queries, predicted, 3, MOVABLE, pool) == Counts(unused_correct=1)
+
+
+def test_percentages_are_averaged_over_households_not_pooled() -> None:
+    a = Counts(used_correct=1, used_wrong=0, used_missed=1, unused_correct=9, unused_wrong=1).percentages()
+    b = Counts(used_correct=3, used_wrong=1, used_missed=0, unused_correct=100, unused_wrong=0).percentages()
+    for result in (a, b):
+        result["unused_used_pool"] = result["unused"]
+    summary = summarise({"a": a, "b": b})
+    assert summary["used"] == {"correct": pytest.approx(62.5), "wrong": pytest.approx(12.5),
+                               "missed": pytest.approx(25.0)}
+    assert summary["unused"]["wrong"] == pytest.approx(5.0)
+    assert summary["spread"]["used"]["correct"] == pytest.approx(12.5)
+
+
+def test_window_must_be_a_positive_multiple_of_the_grid() -> None:
+    assert window_steps(30, 10) == 3
+    with pytest.raises(ModelError, match="25 min"):
+        window_steps(25, 10)
+    with pytest.raises(ModelError, match="multiple of 10"):
+        window_steps(0, 10)

@@ -1,0 +1,98 @@
+"""The grasp regression suite: the quick subset in the default pass, the full suite behind the `slow` marker."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from homer_sim.errors import HomerError
+from homer_sim.home.catalog import CATALOG
+from homer_sim.recording import read_recording
+from planners.grasp_suite import (
+    MAX_SLIP,
+    MIN_LIFT,
+    TARGET_CLASS,
+    TARGET_OVERALL,
+    TrialResult,
+    chosen_classes,
+    quick_subset,
+    run_suite,
+    suite_classes,
+    summarise,
+)
+from planners.grasps import ungraspable_reason
+
+
+def test_suite_lists_every_apartment_class_once_with_reasons_for_exclusions() -> None:
+    included, excluded = suite_classes()
+    assert not set(included) & set(excluded)
+    assert len(included) + len(excluded) == 87
+    for cls, reason in excluded.items():
+        assert reason == ungraspable_reason(CATALOG[cls]) and reason
+    quick = quick_subset(included)
+    families = {CATALOG[c].family for c in included}
+    assert len(quick) == len(families) + 1
+    assert {CATALOG[c].family for c in quick} == families  # one class per family, and one with a handle
+    assert len([c for c in quick if CATALOG[c].handle is not None]) == 1
+
+
+def test_chosen_classes_name_their_instances_and_refuse_unknown_or_excluded_ones() -> None:
+    included, _ = suite_classes()
+    assert chosen_classes(["mug", "bowl"]) == {"mug": included["mug"], "bowl": included["bowl"]}
+    with pytest.raises(HomerError, match="'mugg' is unknown; included: bowl"):
+        chosen_classes(["mugg"])
+    with pytest.raises(HomerError, match="'plate' is excluded"):
+        chosen_classes(["plate"])
+
+
+def test_summary_counts_trials_and_rates() -> None:
+    results = [TrialResult("bowl", True, "", 0.15, 0.001, 1.0), TrialResult("bowl", False, "missed", 0.0,
+                                                                             np.nan, 1.0),
+               TrialResult("mug", True, "", 0.14, 0.0, 1.0)]
+    summary = summarise(results, {"plate": "wide"}, 3, 3.0, {})
+    assert summary["trials"] == 3 and summary["overall"] == pytest.approx(2 / 3)
+    assert summary["per_class"]["bowl"] == {"trials": 2, "successes": 1, "failures": ["missed"], "family": "bowl",
+                                            "min_lift_m": 0.15, "max_slip_m": 0.001}
+    assert summary["worst_class_rate"] == 0.5 and not summary["meets_targets"]
+
+
+QUICK_MIN_OVERALL = 0.9  # regression floor: 12 of 12 measured; one failure allowed for float differences between
+# machines (the slow full-suite test asserts the targets)
+
+
+def test_quick_subset_lifts_and_holds(tmp_path: Path) -> None:
+    result = run_suite(quick=True, seed=0, progress=False, rrd=tmp_path / "grasps.rrd")
+    assert result["trials"] == len(result["per_class"]) >= 8
+    assert 0.0 <= result["overall"] <= 1.0
+    assert result["overall"] >= QUICK_MIN_OVERALL, result["per_class"]
+    for cls, entry in result["per_class"].items():
+        assert len(entry["failures"]) == entry["trials"] - entry["successes"]
+        assert all(entry["failures"]), cls  # every failure says why
+        if entry["successes"]:
+            assert entry["min_lift_m"] >= MIN_LIFT and entry["max_slip_m"] < MAX_SLIP, (cls, entry)
+    assert result["per_class"]["trashcan"]["successes"] == 1  # a rim pinch of a bin on the floor
+    entities = read_recording(tmp_path / "grasps.rrd")  # every trial recorded, one after the other
+    events = [text for row in entities["events"].column("TextLog:text").to_pylist() if row for text in row]
+    assert {e.split(" trial ")[0] for e in events if " trial " in e} == set(result["per_class"]), events
+    times = entities["world/bodies/robot\\/base"].column("physics_s").drop_null().to_pylist()
+    assert times == sorted(times) and len(times) > 10 * result["trials"]
+
+
+def test_the_way_down_into_a_side_grasp_keeps_to_its_line() -> None:
+    """Seed 1's first two start poses of the milk in the fridge: the descent's waypoints, solved loosely and each
+    seeding the next, drifted up to 14 mm aside, a pad struck the carton, and it turned out of the hand in the hold
+    (lifted -51.5 cm); a descent that strays is solved exactly, and the carton is held."""
+    included, _ = suite_classes()
+    result = run_suite(trials=2, seed=1, progress=False, classes={"milk": included["milk"]})
+    assert result["per_class"]["milk"]["successes"] == 2, result["per_class"]["milk"]["failures"]
+
+
+@pytest.mark.slow
+def test_full_grasp_suite_meets_its_targets() -> None:
+    result = run_suite(seed=0, progress=False)
+    rates = {c: e["successes"] / e["trials"] for c, e in result["per_class"].items()}
+    assert result["overall"] >= TARGET_OVERALL, rates
+    assert min(rates.values()) >= TARGET_CLASS, rates
+    assert len(result["excluded"]) <= result["classes"] / 5, result["excluded"]

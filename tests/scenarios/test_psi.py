@@ -1,0 +1,164 @@
+"""Psi on hand-made scene graphs: first changes, thresholds, container order, skips and the hold rule."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from homer_sim.graph import INSIDE, ON, SceneGraph
+from model.predictor import Rollout
+from scenarios.psi import Holds, PlanStep, psi, unused_help
+
+NODES = ("kitchen", "cupboard", "fridge", "table", "sink", "bowl", "cereal", "milk", "spoon", "tray")
+CATEGORIES = ("room", "furniture", "appliance", "furniture", "furniture", "object", "object", "object", "object",
+              "object")
+MOVABLE = np.array([c == "object" for c in CATEGORIES])
+CONTAINERS = {"cupboard": ("cupboard/left", "cupboard/right"), "fridge": ("fridge/door",)}
+IDX = {n: i for i, n in enumerate(NODES)}
+
+
+def _graph(**where: str) -> SceneGraph:
+    """The start: bowl, cereal and spoon in the cupboard, milk in the fridge, a tray on the table."""
+    parents = {"cupboard": "kitchen", "fridge": "kitchen", "table": "kitchen", "sink": "kitchen",
+               "bowl": "cupboard", "cereal": "cupboard", "milk": "fridge", "spoon": "cupboard", "tray": "table",
+               **where}
+    parent = np.array([-1] + [IDX[parents[n]] for n in NODES[1:]])
+    relation = np.array([0] + [INSIDE if parents[n] in CONTAINERS else ON for n in NODES[1:]])
+    return SceneGraph(NODES, CATEGORIES, parent, relation)
+
+
+def _rollout(graph: SceneGraph, moves: dict[str, list[tuple[str, float]]], steps: int = 3) -> Rollout:
+    """Per step s the predicted (parent, probability) of each listed object; others stay with probability 0.9.
+    The second most likely parent of a mover is its observed one (probability 1 - p)."""
+    parent = np.repeat(graph.parent.astype(np.int64)[None, None], steps, axis=0)
+    confidence = np.full(parent.shape, 0.9, dtype=np.float32)
+    other = np.full(parent.shape, IDX["sink"], dtype=np.int64)
+    other_confidence = np.full(parent.shape, 0.05, dtype=np.float32)
+    for name, per_step in moves.items():
+        i = IDX[name]
+        for s, (dest, p) in enumerate(per_step):
+            parent[s, 0, i] = IDX[dest] if p >= 0.5 else graph.parent[i]
+            confidence[s, 0, i] = max(p, 1 - p)
+            if dest != NODES[graph.parent[i]]:
+                other[s, 0, i], other_confidence[s, 0, i] = IDX[dest], p
+    return Rollout(parent, confidence, other, other_confidence)
+
+
+def _plan(graph, rollout, **kw):
+    args = {"threshold": 0.0, "window_steps": 3, "containers": CONTAINERS, **kw}
+    return psi(graph, MOVABLE, rollout, **args)
+
+
+def test_nothing_is_planned_when_the_prediction_equals_the_state() -> None:
+    graph = _graph()
+    plan = _plan(graph, _rollout(graph, {}))
+    assert plan.relocations == () and plan.steps == () and plan.skipped == ()
+
+
+def test_only_the_first_predicted_change_counts() -> None:
+    graph = _graph()
+    rollout = _rollout(graph, {"bowl": [("cupboard", 0.1), ("table", 0.8), ("sink", 0.9)]})
+    (relocation,) = _plan(graph, rollout).relocations
+    assert (relocation.obj, relocation.source, relocation.destination) == ("bowl", "cupboard", "table")
+    assert relocation.steps_ahead == 2 and abs(relocation.confidence - 0.8) < 1e-6
+    # A window of one step ends before the first change: nothing to do.
+    assert _plan(graph, rollout, window_steps=1).relocations == ()
+
+
+def test_containers_are_opened_before_the_pick_and_closed_after_the_place() -> None:
+    graph = _graph()
+    rollout = _rollout(graph, {"cereal": [("table", 0.9)] * 3, "bowl": [("table", 0.9)] * 3,
+                               "milk": [("cupboard", 0.2), ("table", 0.7), ("table", 0.7)]})
+    plan = _plan(graph, rollout)
+    assert [(s.action, s.target) for s in plan.steps] == [
+        ("open", "cupboard/left"), ("open", "cupboard/right"),
+        ("pick", "bowl"), ("place", "table"), ("pick", "cereal"), ("place", "table"),
+        ("close", "cupboard/right"), ("close", "cupboard/left"),
+        ("open", "fridge/door"), ("pick", "milk"), ("place", "table"), ("close", "fridge/door")]
+    assert plan.steps[2] == PlanStep("pick", "bowl", "cupboard", "bowl")
+
+
+def test_a_move_between_containers_opens_both_before_the_pick() -> None:
+    graph = _graph()
+    plan = _plan(graph, _rollout(graph, {"milk": [("cupboard", 0.9)] * 3}))
+    actions = [(s.action, s.target) for s in plan.steps]
+    assert actions[:2] == [("open", "fridge/door"), ("open", "cupboard/left")]
+    assert actions.index(("pick", "milk")) < actions.index(("place", "cupboard"))
+    assert {a for a, _ in actions[-3:]} == {"close"}
+    # A container the person left open is neither opened nor closed by the robot.
+    plan = _plan(graph, _rollout(graph, {"milk": [("cupboard", 0.9)] * 3}), already_open=("fridge",))
+    assert ("open", "fridge/door") not in [(s.action, s.target) for s in plan.steps]
+    assert ("close", "fridge/door") not in [(s.action, s.target) for s in plan.steps]
+
+
+def test_the_threshold_gates_moves_and_reports_them() -> None:
+    graph = _graph()
+    rollout = _rollout(graph, {"bowl": [("table", 0.4)] * 3, "cereal": [("table", 0.8)] * 3})
+    assert {r.obj for r in _plan(graph, rollout, threshold=0.3).relocations} == {"bowl", "cereal"}
+    plan = _plan(graph, rollout, threshold=0.5)
+    assert [r.obj for r in plan.relocations] == ["cereal"]
+    assert plan.skipped == ()  # bowl's argmax stays put: below 0.5 it is no move at all
+    plan = _plan(graph, rollout, threshold=0.85)
+    assert plan.relocations == ()
+    (low, reason), = plan.skipped
+    assert low.obj == "cereal" and "below the threshold 0.85" in reason
+
+
+def test_carried_excluded_and_unplaceable_moves_are_skipped_with_reasons() -> None:
+    graph = _graph()
+    rollout = _rollout(graph, {"bowl": [("table", 0.9)] * 3, "cereal": [("table", 0.9)] * 3,
+                               "spoon": [("bowl", 0.9)] * 3, "milk": [("table", 0.9)] * 3})
+    plan = _plan(graph, rollout, carried=("bowl",), excluded=lambda o: "too flat" if o == "cereal" else None)
+    assert [r.obj for r in plan.relocations] == ["milk"]
+    reasons = {r.obj: why for r, why in plan.skipped}
+    assert reasons["bowl"] == "in the person's hand" and reasons["cereal"] == "too flat"
+    assert "destination bowl is a object" in reasons["spoon"]
+    assert all(s.obj == "milk" for s in plan.steps if s.action in ("pick", "place"))
+
+
+def test_held_objects_stay_until_the_person_moves_them_or_the_window_passes() -> None:
+    holds = Holds()
+    on_table = _graph(bowl="table")
+    holds.add("bowl", "table", minute=420.0, until=450.0)
+    back = _rollout(on_table, {"bowl": [("cupboard", 0.9)] * 3})
+    plan = _plan(on_table, back, holds=holds)
+    assert plan.relocations == () and "held on table" in plan.skipped[0][1]
+    assert holds.update(on_table, minute=440.0) == []  # still on the table, window not over
+    released = holds.update(on_table, minute=451.0)  # the window passed: the robot may put it back
+    assert [h.obj for h in released] == ["bowl"] and [r.obj for r in _plan(on_table, back, holds=holds).relocations] \
+        == ["bowl"]
+    holds.add("bowl", "table", minute=460.0, until=490.0)
+    in_sink = _graph(bowl="sink")
+    assert [h.obj for h in holds.update(in_sink, minute=470.0)] == ["bowl"]  # the person used it
+    holds.add("cereal", "table", minute=460.0, until=490.0)
+    assert [h.obj for h in holds.update(_graph(cereal="table"), 470.0, used={"cereal"})] == ["cereal"]
+
+
+def test_help_the_person_did_not_use_goes_back_where_it_came_from_whatever_the_prediction() -> None:
+    holds = Holds()
+    on_table = _graph(bowl="table", cereal="table", milk="table")
+    for obj, source in (("bowl", "cupboard"), ("cereal", "cupboard"), ("milk", "fridge")):
+        holds.add(obj, "table", minute=400.0, until=430.0, source=source)
+    grabbed_at = {"cereal": 425.0, "milk": 390.0}  # the person took the cereal; the milk only before the robot
+    assert holds.update(on_table, 420.0, grabbed_at={"milk": 390.0}) == []
+    released = holds.update(on_table, 440.0, grabbed_at=grabbed_at)
+    assert sorted(h.obj for h in released) == ["bowl", "cereal", "milk"]
+    returns = unused_help(released, on_table, grabbed_at=grabbed_at)
+    assert [(r.obj, r.source, r.destination, r.put_back) for r in returns] == [
+        ("bowl", "table", "cupboard", True), ("milk", "table", "fridge", True)]
+    assert unused_help(released, _graph(bowl="sink", milk="table"), used={"milk"}) == []  # moved or in hand
+    to_sink = _rollout(on_table, {"bowl": [("sink", 0.9)] * 3, "cereal": [("cupboard", 0.9)] * 3})
+    plan = _plan(on_table, to_sink, returns=returns)
+    assert {(r.obj, r.destination) for r in plan.relocations} == {("bowl", "cupboard"), ("milk", "fridge"),
+                                                                  ("cereal", "cupboard")}
+    assert [s.action for s in plan.steps if s.obj == "bowl"] == ["pick", "place"]
+
+
+def test_nothing_is_taken_from_or_put_on_furniture_the_person_is_at() -> None:
+    graph = _graph(bowl="table", cereal="table")
+    rollout = _rollout(graph, {"bowl": [("cupboard", 0.9)] * 3, "milk": [("table", 0.9)] * 3,
+                               "spoon": [("sink", 0.9)] * 3})
+    plan = _plan(graph, rollout, in_use=("table",))
+    assert [r.obj for r in plan.relocations] == ["spoon"]
+    reasons = {r.obj: why for r, why in plan.skipped}
+    assert reasons == {"bowl": "the person is at table", "milk": "the person is at table"}
+    assert {r.obj for r in _plan(graph, rollout).relocations} == {"bowl", "milk", "spoon"}

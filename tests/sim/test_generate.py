@@ -1,0 +1,127 @@
+"""Dataset generation: deterministic bytes, atomic days, retries that are logged, statistics, compatibility."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from homer_sim.data.dataset import Dataset, DatasetError, read_day
+from homer_sim.data.generate import Generator, Sources, generate
+from homer_sim.data.stats import dataset_stats
+from homer_sim.days import DayKey
+from homer_sim.errors import HomerError
+
+REFERENCE = Path(__file__).resolve().parents[3] / "shared" / "homer_reference"
+
+
+def _digest(folder: Path) -> dict[str, str]:
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file() and p.name != "generation.log"}
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("data") / "one"
+    generate(out, n_households=2, train_days=1, test_days=1, seed=7, workers=1, progress=False)
+    return out
+
+
+def test_same_seed_same_bytes_whatever_the_workers(small: Path, tmp_path: Path) -> None:
+    again = tmp_path / "two"
+    generate(again, n_households=2, train_days=1, test_days=1, seed=7, workers=2, progress=False)
+    assert _digest(small) == _digest(again)
+    assert len(_digest(small)) == 5  # meta.json and four days
+
+
+def test_day_file_round_trips_and_is_a_valid_scene_graph_sequence(small: Path) -> None:
+    data = Dataset(small)
+    day = data.load("household_a", "train")[0]
+    assert day.parent.dtype == np.int16 and day.parent.shape == (day.steps, len(data.meta.nodes))
+    assert 80 <= day.steps <= 130 and day.minutes[0] == 360 and np.all(np.diff(day.minutes) == 10)
+    for step in (0, day.steps // 2, day.steps - 1):
+        day.graph(step, data.meta)  # validates the in-tree
+    static = ~data.meta.movable_mask
+    assert np.all(day.parent[:, static] == day.parent[0, static])  # furniture never moves
+    activities = [a for a, _, _ in day.schedule]
+    assert activities and all(s < e for _, s, e in day.schedule)
+    assert any(m[1] for m in day.moves) and all(isinstance(m[0], float) for m in day.moves)
+    copy = read_day(small / "household_a" / "train" / "day_000.npz")
+    assert np.array_equal(copy.parent, day.parent) and copy.schedule == day.schedule
+
+
+def test_corrupted_day_is_a_clear_error(small: Path, tmp_path: Path) -> None:
+    broken = tmp_path / "day_000.npz"
+    broken.write_bytes((small / "household_a" / "train" / "day_000.npz").read_bytes()[:200])
+    with pytest.raises(DatasetError, match="corrupted"):
+        read_day(broken)
+
+
+def test_failed_attempt_is_retried_and_logged(tmp_path: Path, monkeypatch) -> None:
+    from homer_sim.home.spots import PlacementError
+    from homer_sim.person import executor as executor_module
+
+    real_run_day = executor_module.Executor.run_day
+    calls = {"n": 0}
+
+    def flaky(self, entries, scripts, rng):
+        calls["n"] += 1
+        if calls["n"] == 1:
+            raise PlacementError("no free spot for bowl on table_dining_room (injected)")
+        return real_run_day(self, entries, scripts, rng)
+
+    monkeypatch.setattr(executor_module.Executor, "run_day", flaky)
+    out = tmp_path / "retry"
+    generate(out, n_households=1, train_days=1, test_days=0, seed=3, workers=1, progress=False)
+    record = json.loads((out / "generation.log").read_text().splitlines()[0])
+    assert record["attempts"] == 2 and "injected" in record["failures"][0]
+    assert read_day(out / "household_a" / "train" / "day_000.npz").key == DayKey(3, 0, "train", 0, 1)
+
+
+def test_a_folder_with_another_dataset_is_refused(small: Path) -> None:
+    with pytest.raises(HomerError, match="other settings"):
+        generate(small, n_households=2, train_days=1, test_days=1, seed=8, workers=1, progress=False)
+
+
+def test_interrupted_generation_resumes_without_rewriting(small: Path) -> None:
+    before = _digest(small)
+    summary = generate(small, n_households=2, train_days=1, test_days=1, seed=7, workers=1, progress=False)
+    assert summary["days_written"] == 0 and _digest(small) == before
+
+
+def test_stats_follow_the_design_definitions(small: Path) -> None:
+    stats = dataset_stats(small)
+    assert set(stats["households"]) == {"household_a", "household_b"}
+    for household in stats["households"].values():
+        assert household["days"] == 2
+        assert 80 <= household["steps_per_day"] <= 130
+        assert 10 <= household["moves_per_day"] <= 80
+        assert 5 <= household["objects_used"] <= 87
+    assert stats["wall_s_per_day"] > 0
+
+
+def test_unknown_household_habits_folder_is_an_error(tmp_path: Path) -> None:
+    with pytest.raises(HomerError):
+        Generator(Sources(habits=str(tmp_path)))
+
+
+@pytest.mark.skipif(not REFERENCE.is_dir(), reason="the HOMER reference folder is not beside the checkout")
+def test_compat_check_runs_most_homer_scripts() -> None:
+    from homer_sim.person.compat import compat_check
+
+    result = compat_check(REFERENCE / "sourcedScriptsByActivity")
+    assert result["scripts"] == len(list((REFERENCE / "sourcedScriptsByActivity").glob("*/*.txt")))
+    assert result["executed"] >= 0.9 * result["scripts"], result["failures"]
+
+
+@pytest.mark.skipif(not REFERENCE.is_dir(), reason="the HOMER reference folder is not beside the checkout")
+def test_generation_from_homer_habits_and_scripts(tmp_path: Path) -> None:
+    out = tmp_path / "homer"
+    sources = Sources(habits=str(REFERENCE / "personaBasedSchedules"),
+                      scripts=str(REFERENCE / "sourcedScriptsByActivity"))
+    generate(out, n_households=1, train_days=1, test_days=0, seed=0, workers=1, sources=sources, progress=False)
+    day = Dataset(out).load("persona0", "train")[0]
+    assert day.steps >= 80 and len(day.schedule) > 3

@@ -1,0 +1,78 @@
+"""The layout validator accepts the apartment and rejects bad layouts with an error naming the node."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+
+from homer_sim.errors import LayoutError
+from homer_sim.graph import INSIDE, ON
+from homer_sim.home.apartment import default_layout
+from homer_sim.home.floorplan import floor_plan
+from homer_sim.home.layout import Layout, ObjectDecl, Wall
+from homer_sim.home.validate import MIN_DOORWAY, ROBOT_RADIUS, validate_layout
+
+
+def _with_objects(layout: Layout, *extra: ObjectDecl) -> Layout:
+    return replace(layout, objects=layout.objects + extra)
+
+
+def _with_furniture_change(layout: Layout, name: str, **changes) -> Layout:
+    return replace(layout, furniture=tuple(replace(f, **changes) if f.name == name else f for f in layout.furniture))
+
+
+def test_default_layout_is_valid() -> None:
+    validate_layout(default_layout())
+
+
+def test_every_doorway_fits_the_robot() -> None:
+    layout = default_layout()
+    widths = [end - start for wall in layout.walls for start, end in wall.doorways]
+    assert len(widths) == 4 and min(widths) >= MIN_DOORWAY
+    plan = floor_plan(layout)
+    for wall in layout.walls:  # the robot's disk passes through the middle of each doorway
+        for start, end in wall.doorways:
+            mid = (start + end) / 2
+            (ax, ay), (bx, by) = wall.start, wall.end
+            x, y = ax + (bx - ax) * mid / wall.length, ay + (by - ay) * mid / wall.length
+            assert plan.disk_is_free(x, y, ROBOT_RADIUS + 0.1), (wall.name, x, y)
+
+
+@pytest.mark.parametrize(
+    ("layout", "node", "message"),
+    [
+        (lambda L: _with_objects(L, ObjectDecl("bowl_2", "bowl", "cupboardd", INSIDE)), "bowl_2", "unknown parent"),
+        (lambda L: _with_objects(L, ObjectDecl("milk", "milk", "fridge", INSIDE)), "milk", "duplicate"),
+        (lambda L: _with_objects(L, ObjectDecl("mug_2", "mug", "table_dining_room", INSIDE)), "mug_2",
+         "not a container"),
+        (lambda L: _with_objects(L, ObjectDecl("mug_2", "mugg", "table_dining_room", ON)), "mug_2",
+         "unknown object class"),
+        (lambda L: _with_objects(L, ObjectDecl("mug_2", "mug", "milk", ON)), "mug_2", "does not hold"),
+        (lambda L: replace(L, walls=L.walls[:-1] + (Wall((3.5, 4.5), (3.5, 8.0), ((1.0, 1.8),), "narrow"),)),
+         "narrow", "narrower"),
+        (lambda L: _with_furniture_change(L, "bookshelf_bedroom", size=(0.8, 0.35, 1.6), params={"shelves": (1.45,)}),
+         "bookshelf_bedroom", "out of the robot's reach"),
+        (lambda L: _with_furniture_change(L, "cupboard", params={"shelves": (0.45, 1.3)}, size=(0.8, 0.6, 1.8)),
+         "cupboard", "out of the robot's reach"),
+        (lambda L: _with_furniture_change(L, "table_dining_room", pos=(1.9, 1.2)), "cupboard", "swing"),
+        (lambda L: _with_furniture_change(L, "sofa_bedroom", facing="W"), "sofa_bedroom", "base pose"),
+        (lambda L: _with_furniture_change(L, "bench", room="kitchen"), "bench", "unknown room"),
+        (lambda L: _with_furniture_change(L, "bench", pos=(-0.5, 4.0)), "bench", "leaves room"),
+    ],
+    ids=["unknown-parent", "duplicate-name", "inside-non-container", "unknown-class", "object-not-support",
+         "narrow-doorway", "shelf-too-high", "cupboard-shelf-too-high", "door-swing-blocked", "no-base-pose",
+         "unknown-room", "outside-its-room"],
+)
+def test_bad_layouts_are_rejected_naming_the_node(layout, node: str, message: str) -> None:
+    with pytest.raises(LayoutError, match=message) as error:
+        validate_layout(layout(default_layout()))
+    assert node in str(error.value)
+
+
+def test_object_that_does_not_fit_is_rejected() -> None:
+    books = (ObjectDecl(f"book_{k}", "book", "table_bedroom", ON) for k in range(12))
+    crowded = _with_objects(default_layout(), *books)
+    with pytest.raises(LayoutError, match="does not fit") as error:
+        validate_layout(crowded)
+    assert "book_" in str(error.value) and "table_bedroom" in str(error.value)
