@@ -25,6 +25,7 @@ import logging
 import os
 import sys
 from dataclasses import asdict
+from functools import partial
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
@@ -44,12 +45,14 @@ from model.evaluate import (  # noqa: E402
     household_result,
     household_split,
     run_fit,
+    score_windows,
     split_days,
     summarise,
 )
-from model.metrics import Counts, day_queries  # noqa: E402
+from model.metrics import Counts, Queries, day_queries  # noqa: E402
 from model.names import DEFAULT_METHODS  # noqa: E402
 from model.plots import days_curve, window_bars  # noqa: E402
+from model.predictor import Predictor  # noqa: E402
 from model.report import format_table  # noqa: E402
 from model.train import TORCH_THREADS  # noqa: E402
 from scenarios.cli.common import add_backend_arguments, backend_from_args  # noqa: E402
@@ -105,14 +108,21 @@ def run_task(dataset: Dataset, key: str, house: str, method: str, days: int | No
     fit, val, test, pool = household_split(dataset, house, days)
     spec = FitSpec(method, tuple(fit), tuple(val), init=init)
     queries = day_queries(test, max(CURVE_WINDOWS_MIN) // dataset.meta.grid_min)
-    return fit_task(key, spec, dataset.meta, HEADLINE_WINDOW_MIN, spec.path(folder, house), queries=queries,
-                    windows_min=CURVE_WINDOWS_MIN, pool=pool)
+    return fit_task(key, spec, dataset.meta, HEADLINE_WINDOW_MIN, spec.path(folder, house),
+                    scorer=partial(curve_scores, queries, pool))
+
+
+def curve_scores(queries: Queries, pool: np.ndarray, predictor: Predictor, target: str) -> dict:
+    """Outcome counts of a tuned predictor on the test queries for every curve window (all movable nodes as the
+    unused pool, and the household's used objects)."""
+    scored = score_windows(predictor, queries, CURVE_WINDOWS_MIN, predictor.meta.grid_min, pool)
+    return {"windows": {str(w): {"all": asdict(c), "used_pool": asdict(p)} for w, (c, p) in scored.items()},
+            "queries": len(queries)}
 
 
 def record(result: FitResult) -> dict:
     """The runs.json record of a finished run."""
-    return {"windows": {str(w): {"all": asdict(c), "used_pool": asdict(p)} for w, (c, p) in result.scored.items()},
-            "queries": result.queries, "params": result.predictor.params, "info": result.info,
+    return {**result.scores, "params": result.predictor.params, "info": result.info,
             "wall_s": round(result.wall_s, 1)}
 
 

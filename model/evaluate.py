@@ -16,8 +16,9 @@ import itertools
 import json
 import logging
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, fields
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +28,7 @@ from homer_sim.clock import DEFAULT_WINDOW_MIN
 from homer_sim.data.dataset import Dataset, DatasetMeta, Day
 from homer_sim.execution import IN_PROCESS, Backend
 from model.methods import check_method, load_predictor, make_predictor, save_predictor
-from model.metrics import Counts, Queries, day_queries, gate, score, window_steps
+from model.metrics import F1_STEPS, Counts, Queries, day_queries, gate, relocation_counts, score, window_steps
 from model.predictor import ModelError, Predictor, Rollout
 from model.train import TORCH_THREADS
 
@@ -36,7 +37,8 @@ VAL_FRACTION = 0.1
 HEADLINE_WINDOW_MIN = DEFAULT_WINDOW_MIN
 CURVE_WINDOWS_MIN = tuple(range(10, 130, 10))
 MAX_UNUSED_WRONG_PCT = 1.0  # tuning keeps at least 99% of unused objects in place when any setting can
-TUNING_VERSION = 2  # bump when the tuning rule or a grid changes: cached tunings are then redone
+TUNING_VERSION = 3  # bump when the tuning rule or a grid changes: cached tunings are then redone
+TARGETS = ("paper", "f1")  # what tunables are chosen for: the paper's objective, or relocation F1
 QUERY_CHUNK = 128  # queries per rollout call, bounds memory of the dense (B, N, N) probabilities
 
 
@@ -55,12 +57,13 @@ def rollout_queries(predictor: Predictor, queries: Queries, steps: int) -> Rollo
     return Rollout(*(np.concatenate([getattr(p, f.name) for p in parts], axis=1) for f in fields(Rollout)))
 
 
-def tune(predictor: Predictor, queries: Queries, steps: int) -> tuple[dict[str, float], float]:
-    """Grid search of the predictor's tunables on validation queries; sets and returns the best (and its objective).
+def tune(predictor: Predictor, queries: Queries, steps: int, target: str = "paper") -> tuple[dict[str, float], float]:
+    """Grid search of the predictor's tunables on validation queries; sets and returns the best (and its score).
 
-    Best: the highest objective among settings that move at most MAX_UNUSED_WRONG_PCT of the unused objects, or
-    the highest objective overall if none does. The threshold only changes the decision rule applied to a rollout,
-    so one rollout per combination of the other tunables scores every threshold.
+    target "paper": the highest objective among settings that move at most MAX_UNUSED_WRONG_PCT of the unused
+    objects, or the highest objective overall if none does. target "f1": the highest mean relocation F1 over
+    steps 1 .. `steps`. The threshold only changes the decision rule applied to a rollout, so one rollout per
+    combination of the other tunables scores every threshold.
     """
     names = [k for k in predictor.grid if k != "threshold"]
     thresholds = predictor.grid.get("threshold", (predictor.params["threshold"],))
@@ -69,13 +72,22 @@ def tune(predictor: Predictor, queries: Queries, steps: int) -> tuple[dict[str, 
         predictor.set_params(**dict(zip(names, values, strict=True)))
         rollout = rollout_queries(predictor, queries, steps)
         for threshold in thresholds:
-            counts = score(queries, gate(rollout, queries.observed, threshold), steps, predictor.movable)
-            within = counts.unused_wrong <= MAX_UNUSED_WRONG_PCT / 100.0 * counts.unused
+            predicted = gate(rollout, queries.observed, threshold)
             params = {**dict(zip(names, values, strict=True)), "threshold": float(threshold)}
-            scored.append((within, counts.objective(), -len(scored), params))
+            scored.append((*_tuning_score(target, queries, predicted, steps, predictor.movable), -len(scored), params))
     within, objective, _, best = max(scored, key=lambda row: row[:3])  # earliest in grid order wins ties
     predictor.set_params(**best)
     return dict(predictor.params), objective
+
+
+def _tuning_score(target: str, queries: Queries, predicted: np.ndarray, steps: int, movable: np.ndarray
+                  ) -> tuple[bool, float]:
+    """(admissible, score) of one setting's predictions; higher is better."""
+    if target == "f1":
+        return True, float(relocation_counts(queries, predicted, movable, steps).f1().mean())
+    counts = score(queries, predicted, steps, movable)
+    return counts.unused_wrong <= MAX_UNUSED_WRONG_PCT / 100.0 * counts.unused, counts.objective()
+
 
 def days_fingerprint(days: Sequence[Day]) -> str:
     """A short digest of the days' parent arrays (the cache key of a fitted predictor)."""
@@ -105,37 +117,85 @@ class FitSpec:
         return folder / household / f"{self.method}_{len(self.fit_days)}+{len(self.val_days)}d_{self.key()}.pt"
 
 
+def tuning_key(target: str, window_min: int) -> str:
+    """Name of a tuning in a checkpoint's info: "paper@30" (paper objective at 30 min) or "f1" (steps 1 .. 6)."""
+    if target not in TARGETS:
+        raise ModelError(f"unknown metric {target!r}; known: {', '.join(TARGETS)}")
+    return "f1" if target == "f1" else f"paper@{window_min}"
+
+
+def fit_and_tune(spec: FitSpec, meta: DatasetMeta, window_min: int, target: str = "paper",
+                 cached: tuple[Predictor, dict] | None = None, init_state: dict[str, np.ndarray] | None = None,
+                 progress: bool = True) -> tuple[Predictor, dict, bool]:
+    """Fit `spec` (or take the `cached` predictor and its info) and tune it for `target` unless it already was;
+    reads and writes no file. init_state: pre-trained weights to start from. Returns the predictor, its
+    provenance (days, training report, tunings and their validation scores) and whether it is new or newly tuned.
+
+    target "paper" tunes at `window_min`, "f1" for SLaTe-PRO's F1 over 10 .. 60 minutes (window_min unused).
+    """
+    key = tuning_key(target, window_min)
+    steps = F1_STEPS if target == "f1" else window_steps(window_min, meta.grid_min)
+    tunings: dict = {}
+    if cached is not None:
+        predictor, info = cached
+        tunings = info.get("tunings", {}) if info.get("tuning_version") == TUNING_VERSION else {}
+        if key in tunings:
+            predictor.set_params(**tunings[key]["params"])
+            return predictor, info, False
+    else:
+        predictor = make_predictor(spec.method, meta, progress=progress, **dict(spec.config))
+        if init_state is not None:
+            predictor.load_state(init_state)
+        predictor.fit(spec.fit_days, spec.val_days)
+        info = {"fit_days": len(spec.fit_days), "val_days": len(spec.val_days), "init": str(spec.init or "")}
+        report = getattr(predictor, "report", None)
+        if report is not None:
+            info.update(epochs=report.epochs, best_epoch=report.best_epoch, train_s=round(report.wall_s, 2))
+    params, val_score = tune(predictor, day_queries(spec.val_days, steps), steps, target)
+    log.info("%s tuned for %s: %s (validation score %.4f)", spec.method, key, params, val_score)
+    tunings = {**tunings, key: {"params": params, "val_score": round(val_score, 4)}}
+    return predictor, {**info, "tuning_version": TUNING_VERSION, "tunings": tunings}, True
+
+
+def fit_tuned(spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | None = None,
+              progress: bool = True, target: str = "paper") -> tuple[Predictor, dict]:
+    """Load the cached predictor at `path` or fit one; tune it for `target` unless the cache already was (see
+    `fit_and_tune`), and write the checkpoint when it changed. Every tuning of one fit is kept in the
+    checkpoint's info["tunings"]."""
+    result = run_fit(None, fit_task(spec.method, spec, meta, window_min, path, (target,), progress=progress))
+    result.save()
+    return result.predictor, result.info
+
+
 @dataclass(frozen=True)
 class FitTask:
-    """One fit (unless cached), its tuning at `tune_window_min` and its scores on `queries` at `windows_min`:
-    everything a worker needs, read from disk by the driver (see `fit_task`, `run_fit`); `key` names it and
+    """A fit (unless cached) tuned for each of `targets` in turn, `scorer(predictor, target)` called after each:
+    everything a worker needs, read from disk by the driver (`fit_task`); `run_fit` runs it. `key` names it and
     `checkpoint` is where the driver keeps the predictor."""
 
     key: str
     spec: FitSpec
     meta: DatasetMeta
-    tune_window_min: int
+    window_min: int
+    targets: tuple[str, ...] = ("paper",)
+    scorer: Callable[[Predictor, str], dict] | None = None
     checkpoint: Path | None = None
-    cached: tuple[Predictor, dict] | None = None  # the checkpoint's predictor and info
-    init_state: dict[str, np.ndarray] | None = None  # the pre-trained weights of spec.init
-    queries: Queries | None = None
-    windows_min: tuple[int, ...] = ()
-    pool: np.ndarray | None = None
+    cached: tuple[Predictor, dict] | None = None
+    init_state: dict[str, np.ndarray] | None = None
     progress: bool = False
 
 
 @dataclass(frozen=True)
 class FitResult:
     """A FitTask done: the tuned predictor and its provenance, whether it differs from the checkpoint (then the
-    driver writes it there), the counts per window (see `score_windows`), the queries scored, wall seconds."""
+    driver writes it there), what the scorer returned (merged over targets) and the wall seconds."""
 
     key: str
     checkpoint: Path | None
     predictor: Predictor
     info: dict
     changed: bool
-    scored: dict[int, tuple[Counts, Counts]]
-    queries: int
+    scores: dict
     wall_s: float
 
     def save(self) -> None:
@@ -144,63 +204,29 @@ class FitResult:
             save_predictor(self.checkpoint, self.predictor, self.info)
 
 
-def fit_task(key: str, spec: FitSpec, meta: DatasetMeta, tune_window_min: int, path: Path | None = None,
-             **scoring: object) -> FitTask:
-    """The FitTask of `spec`, with the checkpoint at `path` and the pre-trained weights read here, on the
-    driver; `scoring`: queries, windows_min, pool, progress (see FitTask)."""
-    progress = bool(scoring.get("progress", False))
+def fit_task(key: str, spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | None = None,
+             targets: tuple[str, ...] = ("paper",), scorer: Callable[[Predictor, str], dict] | None = None,
+             progress: bool = False) -> FitTask:
+    """The FitTask of `spec`, with the checkpoint at `path` and the pre-trained weights of spec.init read here,
+    on the driver."""
     cached = load_predictor(path, meta, progress=progress) if path is not None and path.is_file() else None
     init_state = None
     if spec.init is not None and cached is None:
         init_state = load_predictor(spec.init, meta, progress=progress)[0].state()
-    return FitTask(key, spec, meta, tune_window_min, path, cached, init_state, **scoring)
+    return FitTask(key, spec, meta, window_min, targets, scorer, path, cached, init_state, progress)
 
 
 def run_fit(_: None, task: FitTask) -> FitResult:
-    """Fit (or take the cached predictor), tune if the cache was not tuned at this window, score; writes nothing.
-    The task function of `homer_sim.execution` (no per-process state)."""
-    started = time.perf_counter()
-    steps = window_steps(task.tune_window_min, task.meta.grid_min)
-    if task.cached is not None:
-        predictor, info = task.cached
-        if info.get("tuned_window_min") == task.tune_window_min and info.get("tuning_version") == TUNING_VERSION:
-            return _scored(task, predictor, info, False, started)
-    else:
-        spec = task.spec
-        predictor = make_predictor(spec.method, task.meta, progress=task.progress, **dict(spec.config))
-        if task.init_state is not None:
-            predictor.load_state(task.init_state)
-        predictor.fit(spec.fit_days, spec.val_days)
-        info = {"fit_days": len(spec.fit_days), "val_days": len(spec.val_days), "init": str(spec.init or "")}
-        report = getattr(predictor, "report", None)
-        if report is not None:
-            info.update(epochs=report.epochs, best_epoch=report.best_epoch, train_s=round(report.wall_s, 2))
-    params, val_score = tune(predictor, day_queries(task.spec.val_days, steps), steps)
-    log.info("%s tuned at %d min: %s (validation objective %.2f)", task.spec.method, task.tune_window_min, params,
-             val_score)
-    info = {**info, "tuned_window_min": task.tune_window_min, "tuning_version": TUNING_VERSION,
-            "val_objective": round(val_score, 4)}
-    return _scored(task, predictor, info, True, started)
-
-
-def _scored(task: FitTask, predictor: Predictor, info: dict, changed: bool, started: float) -> FitResult:
-    scored = {}
-    if task.windows_min:
-        assert task.queries is not None and task.pool is not None, "a FitTask with windows needs queries and a pool"
-        scored = score_windows(predictor, task.queries, task.windows_min, task.meta.grid_min, task.pool)
-    return FitResult(task.key, task.checkpoint, predictor, info, changed, scored,
-                     len(task.queries) if task.queries is not None else 0, time.perf_counter() - started)
-
-
-def fit_tuned(spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | None = None,
-              progress: bool = True) -> tuple[Predictor, dict]:
-    """Load the cached predictor at `path` or fit one; tune it at `window_min` unless the cache already was.
-
-    Returns the predictor and its provenance (days, training report, tuning window and validation objective).
-    """
-    result = run_fit(None, fit_task(spec.method, spec, meta, window_min, path, progress=progress))
-    result.save()
-    return result.predictor, result.info
+    """Fit, tune and score a FitTask; writes nothing (the task function of `homer_sim.execution`, no state)."""
+    started, current, changed, scores = time.perf_counter(), task.cached, False, {}
+    for target in task.targets:
+        predictor, info, fresh = fit_and_tune(task.spec, task.meta, task.window_min, target, current,
+                                              task.init_state, task.progress)
+        current, changed = (predictor, info), changed or fresh
+        if task.scorer is not None:
+            scores.update(task.scorer(predictor, target))
+    assert current is not None, "a FitTask has at least one target"
+    return FitResult(task.key, task.checkpoint, *current, changed, scores, time.perf_counter() - started)
 
 
 def used_objects(days: Sequence[Day]) -> np.ndarray:
@@ -220,9 +246,18 @@ def score_windows(predictor: Predictor, queries: Queries, windows_min: Sequence[
 
 def evaluate(data: str | Path, methods: Sequence[str], window_min: int = HEADLINE_WINDOW_MIN,
              checkpoints: str | Path | None = None, households: Sequence[str] | None = None,
-             train_days: int | None = None, progress: bool = True, backend: Backend = IN_PROCESS) -> dict:
-    """The `homer evaluate` result: per method, percentages averaged over households (see DESIGN.md). Each
-    household and method is one task on `backend` (local processes or Ray); checkpoints are written here."""
+             train_days: int | None = None, progress: bool = True, metric: str = "paper",
+             backend: Backend = IN_PROCESS) -> dict:
+    """The `homer evaluate` result: per method, scores averaged over households (see DESIGN.md).
+
+    metric "paper" (the paper's table at `window_min`), "f1" (SLaTe-PRO's relocation F1, 10 .. 60 minutes) or
+    "both"; each is scored with the tunables chosen on validation days for that metric. Keys: "methods"[name] (means
+    over households; "f1" as in summarise_f1) and "per_household"[household][name]. Each household and method is
+    one task on `backend` (this process, local processes or Ray); checkpoints are written here.
+    """
+    if metric not in (*TARGETS, "both"):
+        raise ModelError(f"unknown metric {metric!r}; known: {', '.join(TARGETS)}, both")
+    targets = TARGETS if metric == "both" else (metric,)
     dataset = Dataset(data)
     methods = [check_method(m) for m in methods]
     folder = Path(checkpoints) if checkpoints is not None else dataset.root / "checkpoints"
@@ -231,27 +266,55 @@ def evaluate(data: str | Path, methods: Sequence[str], window_min: int = HEADLIN
     def tasks() -> Iterator[FitTask]:
         for house in names:
             fit, val, test, pool = household_split(dataset, house, train_days)
-            queries = day_queries(test, window_steps(window_min, dataset.meta.grid_min))
             for method in methods:
                 spec = FitSpec(method, tuple(fit), tuple(val))
                 yield fit_task(f"{house}/{method}", spec, dataset.meta, window_min, spec.path(folder, house),
-                               queries=queries, windows_min=(window_min,), pool=pool,
-                               progress=progress and backend == IN_PROCESS)
+                               targets, partial(score_household, (test, pool), window_min),
+                               progress and backend == IN_PROCESS)
 
-    done: dict[tuple[str, str], dict] = {}
+    done: dict[str, dict] = {}
     bar = tqdm(total=len(names) * len(methods), desc="evaluate", unit="fit", disable=not progress)
     with backend.run(run_fit, tasks(), type(None), cpus_per_task=TORCH_THREADS) as run:
         for result in run:
-            house, method = result.key.split("/")
             result.save()
-            counts, pooled = result.scored[window_min]
-            done[house, method] = household_result(counts, pooled, result.predictor.params)
-            bar.set_postfix(household=house, method=method)
+            done[result.key] = result.scores
+            bar.set_postfix(fit=result.key)
             bar.update()
     bar.close()
-    per_house = {m: {house: done[house, m] for house in names} for m in methods}
-    return {"window_min": window_min, "households": names, "train_days": train_days,
-            "methods": {m: summarise(per_house[m]) for m in methods}, "execution": run.usage()}
+    per_house = {m: {h: done[f"{h}/{m}"] for h in names} for m in methods}
+    return {"window_min": window_min, "households": names, "train_days": train_days, "metric": metric,
+            "methods": {m: summarise(per_house[m]) for m in methods},
+            "per_household": {h: {m: per_house[m][h] for m in methods} for h in names}, "execution": run.usage()}
+
+
+def household_scores(spec: FitSpec, meta: DatasetMeta, test: tuple[list[Day], np.ndarray], window_min: int,
+                     path: Path | None, targets: Sequence[str], progress: bool = True) -> dict:
+    """One method on one household's test days (and its used-object pool), for each target metric, in this
+    process (the checkpoint at `path` read and written)."""
+    task = fit_task(spec.method, spec, meta, window_min, path, tuple(targets), partial(score_household, test,
+                                                                                         window_min), progress)
+    result = run_fit(None, task)
+    result.save()
+    return result.scores
+
+
+def score_household(test: tuple[list[Day], np.ndarray], window_min: int, predictor: Predictor, target: str) -> dict:
+    """A predictor tuned for `target` on a household's test days and used-object pool: the paper's percentages at
+    `window_min` (target "paper") or {"f1": SLaTe-PRO's relocation F1} (target "f1")."""
+    days, pool = test
+    if target == "f1":
+        return {"f1": f1_result(predictor, days)}
+    grid_min = predictor.meta.grid_min
+    queries = day_queries(days, window_steps(window_min, grid_min))
+    counts, pooled = score_windows(predictor, queries, [window_min], grid_min, pool)[window_min]
+    return household_result(counts, pooled, predictor.params)
+
+
+def f1_result(predictor: Predictor, days: Sequence[Day]) -> dict:
+    """SLaTe-PRO's relocation F1 of a tuned predictor on `days` (RelocationCounts.summary, plus its params)."""
+    queries = day_queries(days, F1_STEPS)
+    predicted = gate(rollout_queries(predictor, queries, F1_STEPS), queries.observed, predictor.params["threshold"])
+    return {**relocation_counts(queries, predicted, predictor.movable).summary(), "params": dict(predictor.params)}
 
 
 def household_split(dataset: Dataset, house: str, train_days: int | None
@@ -278,14 +341,27 @@ def household_result(counts: Counts, pooled: Counts, params: dict[str, float]) -
 
 
 def summarise(per_house: dict[str, dict]) -> dict:
-    """Mean and spread (population standard deviation) over households of each percentage."""
+    """Mean and spread (population standard deviation) over households of each percentage, and of the F1s."""
     out: dict = {"per_household": per_house}
+    first = next(iter(per_house.values()))
     for group in ("used", "unused", "unused_used_pool"):
-        keys = next(iter(per_house.values()))[group].keys()
-        values = {k: np.array([h[group][k] for h in per_house.values()], dtype=float) for k in keys}
+        if group not in first:
+            continue
+        values = {k: np.array([h[group][k] for h in per_house.values()], dtype=float) for k in first[group]}
         out[group] = {k: _finite(np.nanmean(v)) for k, v in values.items()}
         out.setdefault("spread", {})[group] = {k: _finite(np.nanstd(v)) for k, v in values.items()}
+    if "f1" in first:
+        out["f1"] = summarise_f1([h["f1"] for h in per_house.values()])
     return out
+
+
+def summarise_f1(rows: Sequence[dict]) -> dict:
+    """Households' F1 results -> per_step and mean averaged over households (as the paper table is), tp, fp, fn
+    summed, and "spread" (population standard deviation over households of the mean)."""
+    means = np.array([r["mean"] for r in rows], dtype=float)
+    return {"per_step": [round(float(v), 4) for v in np.mean([r["per_step"] for r in rows], axis=0)],
+            "mean": round(float(means.mean()), 4), "spread": round(float(means.std()), 4),
+            **{k: int(sum(r[k] for r in rows)) for k in ("tp", "fp", "fn")}}
 
 
 def _finite(value: float) -> float | None:

@@ -19,6 +19,7 @@ import numpy as np
 
 from homer_sim.clock import clock_text
 from homer_sim.person.executor import DayLog
+from homer_sim.recording import Recording
 from model.metrics import first_change
 from scenarios.assist import Assistant, AssistLog, run_assisted
 from scenarios.breakfast_data import DataSpec, check_meta, ensure_dataset, ensure_predictor, make_generator
@@ -148,7 +149,6 @@ def assisted_run(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec 
 
     recording = None
     if rrd is not None:
-        from homer_sim.recording import Recording
 
         recording = Recording(rrd)
     assistant = Assistant(predictor, spec.window_min, recording=recording, rng=np.random.default_rng(spec.seed))

@@ -24,8 +24,12 @@ from pathlib import Path
 from homer_sim import __version__
 from homer_sim.clock import DEFAULT_WINDOW_MIN, HOURS_PER_DAY
 from homer_sim.data.dataset import Dataset, DatasetMeta, day_path, write_day, write_meta
+from homer_sim.data.generate import Generator, Sources
 from homer_sim.days import DayKey
+from homer_sim.errors import HomerError
+from homer_sim.person.aliases import Resolver
 from homer_sim.person.households import ACTIVITIES, OPTIONAL, Household
+from homer_sim.person.scripts import parse_script
 
 log = logging.getLogger(__name__)
 
@@ -118,9 +122,6 @@ def cache_root() -> Path:
 
 def make_generator(recording=None):
     """The project's day generator with the breakfast household added to its households."""
-    from homer_sim.data.generate import Generator, Sources
-    from homer_sim.person.aliases import Resolver
-    from homer_sim.person.scripts import parse_script
 
     generator = Generator(Sources(), recording=recording)
     script = parse_script(BREAKFAST_SCRIPT, "scenarios/breakfast_data.py", "breakfast", "demo",
@@ -165,7 +166,7 @@ def ensure_dataset(generator, spec: DataSpec) -> tuple[Dataset, float]:
 def ensure_predictor(dataset: Dataset, spec: DataSpec, progress: bool = False):
     """The predictor fitted and tuned on the training days (cached checkpoint); returns it and wall seconds
     spent fitting (0 when cached)."""
-    from model.evaluate import FitSpec, fit_tuned, split_days
+    from model.evaluate import FitSpec, fit_tuned, split_days  # torch: imported when a predictor is needed
 
     fit, val = split_days(dataset.load(spec.household, "train"))
     fit_spec = FitSpec(spec.method, tuple(fit), tuple(val))
@@ -179,7 +180,6 @@ def ensure_predictor(dataset: Dataset, spec: DataSpec, progress: bool = False):
 
 def check_meta(meta: DatasetMeta, nodes: tuple[str, ...]) -> None:
     """The dataset's nodes must be the apartment's (the predictor indexes nodes by position)."""
-    from homer_sim.errors import HomerError
 
     if tuple(meta.nodes) != tuple(nodes):
         raise HomerError(f"the cached dataset has {len(meta.nodes)} nodes, the apartment {len(nodes)}; "

@@ -14,9 +14,9 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
+from tqdm import tqdm
 
 from homer_sim import __version__
 from homer_sim.data.dataset import DatasetMeta, Day, day_path, write_day, write_meta
@@ -24,9 +24,13 @@ from homer_sim.data.stats import LOG_NAME
 from homer_sim.days import DayKey
 from homer_sim.errors import HomerError
 from homer_sim.execution import IN_PROCESS, Backend
-
-if TYPE_CHECKING:
-    from homer_sim.person.executor import DayLog
+from homer_sim.person.activities import load_library
+from homer_sim.person.aliases import Resolver
+from homer_sim.person.avatar import add_avatar
+from homer_sim.person.executor import DayLog, Executor
+from homer_sim.person.households import load_homer_habits, load_households
+from homer_sim.person.sampler import sample_schedule
+from homer_sim.world import World
 
 log = logging.getLogger(__name__)
 
@@ -50,12 +54,6 @@ class Generator:
     """One worker's simulator: a World with an avatar, an executor, households and scripts."""
 
     def __init__(self, sources: Sources, recording=None) -> None:
-        from homer_sim.person.activities import load_library
-        from homer_sim.person.aliases import Resolver
-        from homer_sim.person.avatar import add_avatar
-        from homer_sim.person.executor import Executor
-        from homer_sim.person.households import load_homer_habits, load_households
-        from homer_sim.world import World
 
         self.world = World(extras=[add_avatar])
         self.executor = Executor(self.world, recording=recording)
@@ -77,7 +75,6 @@ class Generator:
 
     def schedule(self, household: str, key: DayKey) -> list[tuple[str, float, float]]:
         """The (activity, start_min, end_min) entries of `household`'s day `key`, drawn from its schedule stream."""
-        from homer_sim.person.sampler import sample_schedule
 
         durations = {a: s.duration_range for a, s in self.scripts_for(household).items()}
         schedule = sample_schedule(self.households[household], durations, key.streams()[0])
@@ -162,7 +159,6 @@ def generate(out: Path, n_households: int, train_days: int, test_days: int, seed
 
 
 def _progress(results, total: int, enabled: bool):
-    from tqdm import tqdm
 
     return tqdm(results, total=total, desc="days", unit="day", disable=not enabled, dynamic_ncols=True)
 

@@ -206,9 +206,9 @@ def test_evaluate_on_ray_gives_the_local_table_and_the_driver_writes_the_checkpo
     write_synthetic_dataset(tmp_path / "data", np.random.default_rng(3), households=2, train_days=4, test_days=1,
                             size="small")
     local, ray = (evaluate(tmp_path / "data", ["markov", "static_semantic"], 30, tmp_path / name, progress=False,
-                           backend=backend) for name, backend in (("local", Backend()), ("ray", RAY)))
+                           metric="both", backend=backend) for name, backend in (("local", Backend()), ("ray", RAY)))
     assert local.pop("execution")["mode"] == "local" and ray.pop("execution")["mode"] == "ray"
-    assert local == ray
+    assert local == ray and set(local["methods"]["markov"]) >= {"used", "unused", "f1"}
     assert [p.relative_to(tmp_path / "ray") for p in sorted((tmp_path / "ray").rglob("*.pt"))] == \
         [p.relative_to(tmp_path / "local") for p in sorted((tmp_path / "local").rglob("*.pt"))]
     assert len(list((tmp_path / "ray").rglob("*.pt"))) == 4  # 2 households x 2 methods
