@@ -5,8 +5,6 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("homer_sim", "planners", "model", "scenarios")
 
@@ -118,7 +116,6 @@ def test_there_is_no_import_circle() -> None:
             assert visit(start, []) is None
 
 
-@pytest.mark.xfail(strict=True, reason="planners' grasp modules still share private geometry helpers")
 def test_no_module_imports_another_modules_private_names() -> None:
     private = [(name, module, n) for name, path in _sources().items() for module, names in _imported(path)
                if module.split(".")[0] in PACKAGES and module != name for n in names

@@ -7,7 +7,7 @@ import numpy as np
 from homer_sim.graph import INSIDE, ON, RELATION_NAMES
 from homer_sim.home.catalog import CATALOG
 from homer_sim.world import World
-from planners.motion import LEVEL_HAND, PASS_OVER
+from planners.motion.arm import LEVEL_HAND, PASS_OVER
 from planners.robot import add_robot
 from planners.skills import Robot
 

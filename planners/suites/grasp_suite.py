@@ -65,7 +65,7 @@ class TrialResult:
 def suite_classes() -> tuple[dict[str, str], dict[str, str]]:
     """({class: the instance the suite picks}, {excluded class: reason}) over the apartment's movable objects,
     in layout order (the first instance of each class)."""
-    from planners.grasps import ungraspable_reason
+    from planners.grasps.candidate import ungraspable_reason
 
     included: dict[str, str] = {}
     excluded: dict[str, str] = {}
@@ -162,7 +162,7 @@ def _robot_in_front(world: World, name: str, rng: np.random.Generator) -> Robot:
     `name` where no pose in front is free)."""
     import mujoco
 
-    from planners.navigation import NavigationError
+    from planners.motion.navigation import NavigationError
     from planners.skills import Robot
 
     robot = Robot(world, rng)

@@ -2,7 +2,7 @@
 
 From above (top grasps, off-centre ones, out of a drawer past its front), or from a cabinet's shelf or under a
 low shelf from the front (shelf grasps, the object lifted, drawn out, then raised); a failed grasp is retried
-from the next candidate. Movement comes from `planners.motion`.
+from the next candidate. Movement comes from `planners.motion.arm`.
 """
 
 from __future__ import annotations
@@ -15,20 +15,22 @@ import numpy as np
 from homer_sim.graph import INSIDE, ON, RELATION_NAMES
 from homer_sim.home.catalog import CATALOG
 from homer_sim.home.placement import place_world
-from planners.articulate import drawer_rim
-from planners.container_grasps import hang_rotation
-from planners.control import FREE_MOTION
-from planners.grasps import Grasp, disturbed, matrix_to_quat, ungraspable_reason
-from planners.motion import ENTRY_OUT, GRASP_BASE_COST, MIN_HELD_OPENING, PULL_BASE_COST, SIDE_LIFT, SkillResult
-from planners.navigation import NavigationError
-from planners.neighbours import neighbour_footprints
-from planners.shelf_grasps import shelf_grasps
-from planners.top_grasps import offset_grasps, raised_grasps, rim_approach, squared_grasps, top_grasps
+from planners.grasps.above import offset_grasps, raised_grasps, rim_approach, squared_grasps, top_grasps
+from planners.grasps.candidate import Grasp, disturbed, ungraspable_reason
+from planners.grasps.features import hang_rotation
+from planners.grasps.geometry import matrix_to_quat
+from planners.grasps.neighbours import neighbour_footprints
+from planners.grasps.ranking import rank_from_above
+from planners.grasps.shelf import shelf_grasps
+from planners.motion.arm import ENTRY_OUT, GRASP_BASE_COST, MIN_HELD_OPENING, PULL_BASE_COST, SIDE_LIFT, SkillResult
+from planners.motion.control import FREE_MOTION
+from planners.motion.navigation import NavigationError
+from planners.skills.parts import behind_a_door, drawer_rim
 
 LIFT = 0.15  # m
 DRAWER_CLEARANCE = 0.03  # m an object lifted out of a drawer rises past the top of its front
 HOLD_SECONDS = 0.5
-# a side grasp lifts the object SIDE_LIFT m off its shelf (see planners.motion),
+# a side grasp lifts the object SIDE_LIFT m off its shelf (see planners.motion.arm),
 SIDE_PULL = 0.35  # m: then draws it this far out of the furniture,
 SIDE_RAISE = 0.13  # m: then raises it this much more
 OPEN_ABOVE = 0.5  # m of free height above a place below which a grasp from above does not fit
@@ -55,7 +57,7 @@ class Pick:
         position, quat = self.world.object_pose(name)
         furniture = self.navigator.furniture.get(node)
         inside = graph.relation_of(name) == RELATION_NAMES[INSIDE] and furniture is not None
-        if (inside and furniture.kind == "cabinet") or self._under_a_shelf(node, position, cls.size[2]):
+        if (inside and behind_a_door(furniture)) or self._under_a_shelf(node, position, cls.size[2]):
             return self._pick_from_shelf(name, node, cls, position, quat)  # from the front, the base placed per grasp
         side_failures: list[str] = []
         if into is not None and furniture is not None and self._shelves(into, None):
@@ -92,13 +94,14 @@ class Pick:
         candidates += raised_grasps(cls, position, candidates)
         grasps = [replace(g, lift=max(g.lift, lift), approach=g.approach if rim is None else rim_approach(
             g, rim, DRAWER_CLEARANCE)) for g in candidates]
-        grasps.sort(key=lambda g: not self._fingers_fit(g))  # stable: the blocked ones last
-        offsets = [o for g in grasps for o in offset_grasps(cls, quat, g) if self._fingers_fit(o)]
+        clear = [self._fingers_fit(g) for g in grasps]
+        offsets = [(o, fits) for g, fits in zip(grasps, clear, strict=True) for o in offset_grasps(cls, quat, g)
+                   if self._fingers_fit(o)]
         unchecked = []
-        for grasp in sorted(grasps + offsets, key=lambda g: "-squared" in g.kind):  # squared last; a clear way in first
+        for grasp in rank_from_above([*zip(grasps, clear, strict=True), *offsets]):  # a clear way in first
             outcome = self._grasp_from_above(name, grasp, stand_failure, checked_only=True)
             if outcome is None:
-                unchecked += [] if "-offset" in grasp.kind else [grasp]
+                unchecked += [] if grasp.kind.offset else [grasp]
                 continue
             if outcome.success:
                 self.held = name
@@ -168,7 +171,7 @@ class Pick:
         else:  # side grasps, then pitched ones (a hand pointing straight down, or holding the object front to
             front = -np.inf  # back, "-along", does not put it down under a shelf)
             grasps = [g for g in shelf_grasps(cls, position, quat, out, front)
-                      if not g.kind.endswith(("-90", "-along")) and "-rolled" not in g.kind]
+                      if g.kind.pitch != 90 and not g.kind.along and not g.kind.roll]
         if not grasps:
             return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
         unreachable, failures = [], []
@@ -198,7 +201,7 @@ class Pick:
                 again = self._pick_from_shelf(name, node, cls, *now, out, replan=False)
                 return again if again.success else SkillResult(False, f"{again.reason} (moved by {failures})")
         if unreachable:
-            failures.append(f"{', '.join(unreachable)}: no free base pose reaches the grasp without the arm "
+            failures.append(f"{', '.join(map(str, unreachable))}: no free base pose reaches the grasp without the arm "
                             f"touching {node} or its contents")
         return SkillResult(False, f"{name}: every grasp in {node} failed ({'; '.join(failures)})")
 

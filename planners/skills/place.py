@@ -2,7 +2,7 @@
 
 On an open top: lowered onto a free spot from above, let go, the hand drawn back. On a cabinet's shelf: carried
 in from a base pose where the object and the arm clear the cabinet, eased in slowly, let go and drawn straight
-out. Success is read back from the observed scene graph. Movement comes from `planners.motion`.
+out. Success is read back from the observed scene graph. Movement comes from `planners.motion.arm`.
 """
 
 from __future__ import annotations
@@ -13,13 +13,12 @@ import numpy as np
 
 from homer_sim.graph import INSIDE, RELATION_NAMES
 from homer_sim.home.catalog import CATALOG
-from homer_sim.home.validate import ROBOT_RADIUS
-from planners.articulate import base_candidates
-from planners.control import CARRY_MOTION
-from planners.door_skills import ARC_BASE_COST, Held
-from planners.grasps import matrix_to_quat
-from planners.motion import ENTRY_OUT, LEVEL_HAND, PASS_OVER, SIDE_LIFT, SkillResult, _yaw_matrix
-from planners.navigation import CLEARANCE, NavigationError
+from planners.grasps.geometry import matrix_to_quat, yaw_matrix
+from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, SIDE_LIFT, SkillResult
+from planners.motion.clearance import ARC_BASE_COST, Held
+from planners.motion.control import CARRY_MOTION
+from planners.motion.navigation import CLEARANCE, NavigationError, base_candidates
+from planners.skills.parts import behind_a_door
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 CARRY_SLIP = 0.03  # m the held object may shift in the hand while carried before a place gives up
@@ -120,7 +119,7 @@ class Place:
     def _shelves(self, node: str, relation: int | None) -> list[int]:
         """Indices of the shelves inside cabinet `node` that a place with `relation` goes to (none elsewhere)."""
         furniture = self.navigator.furniture.get(node)
-        if furniture is None or furniture.kind != "cabinet":
+        if furniture is None or not behind_a_door(furniture):
             return []
         return [k for k, p in self.spots.places_of(node, relation) if p.relation == INSIDE and p.part is None]
 
@@ -146,7 +145,7 @@ class Place:
         level = np.linalg.norm(now[:2, 0]) > LEVEL_HAND
         turn = math.atan2(-out[1], -out[0]) - (math.atan2(now[1, 0], now[0, 0]) if level else
                                                self.controller.target[2])
-        rotation = _yaw_matrix(turn) @ now
+        rotation = yaw_matrix(turn) @ now
         quat = matrix_to_quat(rotation)
         up, pull = np.array([0.0, 0.0, 1.0]), np.array([out[0], out[1], 0.0])
         clear_out = np.linalg.norm(size) / 2 + ENTRY_OUT  # the object's centre this far out of the front: all out
@@ -208,7 +207,8 @@ class Place:
         reach = self._held_reach()
         obstacles = self.navigator.open_part_rects()
         for base in base_candidates(points[-1], rotation, self.controller.q()[:2]):
-            if not self.navigator.plan.disk_is_free(base[0], base[1], ROBOT_RADIUS + CLEARANCE, obstacles):
+            free = self.navigator.radius + CLEARANCE
+            if not self.navigator.plan.disk_is_free(base[0], base[1], free, obstacles):
                 continue
             q = posture.copy()
             q[:3] = base

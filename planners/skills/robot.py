@@ -4,8 +4,8 @@ Objects move only because the fingers hold them (no weld, no teleport). Each ski
 with success or a clear failure reason; a failed grasp is retried from the next grasp candidate.
 
 `Robot` owns the state (world, IK, control, navigation, scene-graph observer) and mixes in the skills, one
-module each: movement in `planners.motion`, `pick` in `planners.pick`, `place` in `planners.place`; doors and
-drawers are run by `planners.door_skills`.
+module each: movement in `planners.motion.arm`, `pick` in `planners.skills.pick`, `place` in
+`planners.skills.place`; doors and drawers are run by `planners.skills.doors`.
 """
 
 from __future__ import annotations
@@ -14,23 +14,25 @@ import numpy as np
 
 from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
-from planners.control import Controller
-from planners.door_skills import ClearanceCheck, PartMover
-from planners.ik import IKSolver
-from planners.motion import Motion, SkillResult
-from planners.navigation import Navigator
-from planners.pick import Pick
-from planners.place import Place
+from homer_sim.robot_spec import ROBOT, RobotSpec
+from planners.motion.arm import Motion, SkillResult
+from planners.motion.clearance import ClearanceCheck
+from planners.motion.control import Controller
+from planners.motion.ik import IKSolver
+from planners.motion.navigation import Navigator
+from planners.skills.doors import PartMover
+from planners.skills.pick import Pick
+from planners.skills.place import Place
 
 
 class Robot(Motion, Pick, Place):
     """The robot in a World: IK, control, navigation, scene-graph checks, and the skills built on them."""
 
-    def __init__(self, world, rng: np.random.Generator | None = None) -> None:
+    def __init__(self, world, rng: np.random.Generator | None = None, robot: RobotSpec = ROBOT) -> None:
         self.world = world
-        self.ik = IKSolver()
-        self.controller = Controller(world)
-        self.navigator = Navigator(world, self.controller)
+        self.ik = IKSolver(robot=robot)
+        self.controller = Controller(world, robot=robot)
+        self.navigator = Navigator(world, self.controller, robot)
         self.spots = Spots(world)
         self.observer = SceneGraphObserver(world)
         self.rng = rng if rng is not None else np.random.default_rng(0)

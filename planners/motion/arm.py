@@ -3,8 +3,9 @@
 `Motion` owns how the robot moves: IK onto grip-site poses, straight grip-site lines, the tuck and the raised
 arm, joint-space swings checked for clearance, driving to furniture (with or without a held object) or to a base
 pose from which the way into a grasp is clear, the carry path; and what the hand holds (where an object sits in
-it, whether it is empty, whether an object has fallen over). The skills built on it are in `planners.pick`,
-`planners.place` and `planners.door_skills`; constants `planners.pick` and `planners.place` share live here.
+it, whether it is empty, whether an object has fallen over). The skills built on it are in
+`planners.skills.pick`, `planners.skills.place` and `planners.skills.doors`; constants pick and place share
+live here.
 """
 
 from __future__ import annotations
@@ -15,12 +16,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from homer_sim.home.catalog import CATALOG
-from homer_sim.home.validate import ROBOT_RADIUS
-from planners.articulate import base_candidates
-from planners.control import CARRY_MOTION, FREE_MOTION
-from planners.door_skills import ARC_BASE_COST, Held
-from planners.grasps import Grasp, matrix_to_quat, slerp
-from planners.navigation import CLEARANCE
+from planners.grasps.candidate import Grasp
+from planners.grasps.geometry import matrix_to_quat, slerp, yaw_matrix
+from planners.motion.clearance import ARC_BASE_COST, Held
+from planners.motion.control import CARRY_MOTION, FREE_MOTION
+from planners.motion.navigation import CLEARANCE, base_candidates
 
 MIN_HELD_OPENING = 0.001  # m per finger: closed further means the fingers missed
 GRASP_BASE_COST = 100.0  # IK damping on the base while grasping
@@ -183,9 +183,9 @@ class Motion:
         if aside:  # then also those facing into the furniture
             candidates += base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2], -pull)
         lifts = (SIDE_LIFT, LOW_SIDE_LIFT) if np.linalg.norm(pull) > 0.0 else (SIDE_LIFT,)  # a shelf grasp's first leg
+        free = self.navigator.radius + CLEARANCE
         for base in [*here, *candidates]:
-            if base not in here and not self.navigator.plan.disk_is_free(base[0], base[1], ROBOT_RADIUS + CLEARANCE,
-                                                                         obstacles):
+            if base not in here and not self.navigator.plan.disk_is_free(base[0], base[1], free, obstacles):
                 continue
             q = self.tuck.copy()
             q[:3] = base
@@ -293,7 +293,7 @@ class Motion:
         rotation = self.world.data.site("robot/grip").xmat.reshape(3, 3)
         ahead = np.array([np.cos(yaw), np.sin(yaw)])
         if np.linalg.norm(rotation[:2, 0]) > PITCHED_HAND and rotation[:2, 0] @ ahead < 0.0:  # points back: turn it
-            rotation = _yaw_matrix(yaw - math.atan2(rotation[1, 0], rotation[0, 0])) @ rotation
+            rotation = yaw_matrix(yaw - math.atan2(rotation[1, 0], rotation[0, 0])) @ rotation
         level = np.linalg.norm(rotation[:2, 0]) > LEVEL_HAND
         held = None if self.held is None else self._held(self.held)
         best, height = [self.controller.target.copy()], -np.inf
@@ -366,9 +366,3 @@ class Motion:
     def _held_quat(self) -> np.ndarray:
         """The grip site's current orientation (wxyz), kept while carrying."""
         return matrix_to_quat(self.world.data.site("robot/grip").xmat.reshape(3, 3))
-
-
-def _yaw_matrix(angle: float) -> np.ndarray:
-    """The rotation (shape (3, 3)) by `angle` rad about the vertical."""
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
