@@ -12,6 +12,7 @@ import logging
 
 import numpy as np
 
+from planners.motion.arm import Arm
 from planners.motion.clearance import ARC_BASE_COST, ClearanceCheck
 from planners.motion.control import FREE_MOTION
 from planners.motion.navigation import CLEARANCE, NavigationError, base_candidates
@@ -47,13 +48,13 @@ class PhaseFailed(Exception):
 
 
 class PartMover:
-    """Runs open/close phases for a `planners.skills.Robot`."""
+    """Runs open/close phases with the robot's `arm` (see `planners.motion.arm.Arm`)."""
 
-    def __init__(self, robot) -> None:
-        self.robot = robot
-        self.world = robot.world
-        self.controller = robot.controller
-        self.navigator = robot.navigator
+    def __init__(self, arm: Arm) -> None:
+        self.arm = arm
+        self.world = arm.world
+        self.controller = arm.controller
+        self.navigator = arm.navigator
         self.check = ClearanceCheck(self.world, self.controller)
 
     # --- public --------------------------------------------------------------------------------------------
@@ -136,14 +137,14 @@ class PartMover:
                   seeds: bool):
         q = q_from.copy()
         q[:3] = base
-        return self.robot.ik.solve(q, pos, quat, base_cost=ARC_BASE_COST, seeds=seeds)
+        return self.arm.ik.solve(q, pos, quat, base_cost=ARC_BASE_COST, seeds=seeds)
 
     def _plan_grasp(self, motion: PartMotion, grasp: PartGrasp) -> tuple[np.ndarray, np.ndarray]:
         """IK configurations at the grasp and APPROACH m before it, with a free base pose behind them."""
         pos, quat = motion.grip_target(grasp, motion.value)
         rot = motion.pose_at(motion.value)[1] @ grasp.rotation
         before = pos - APPROACH * rot[:, 0]
-        q0 = self.robot.tuck.copy()
+        q0 = self.arm.tuck.copy()
         for base in base_candidates(pos, rot, None):
             if not self._free(np.array(base[:2]), motion, motion.value):
                 continue
@@ -158,10 +159,10 @@ class PartMover:
 
     def _grasp(self, motion: PartMotion, grasp: PartGrasp, q_pre: np.ndarray, q_grasp: np.ndarray) -> None:
         """Drive to the planned base pose, reach in front of the grasp, move in and close the fingers."""
-        robot = self.robot
-        robot.retract()
-        self.navigator.drive_to(tuple(q_pre[:3]), robot.tucked(), **FREE_MOTION)
-        robot.reach(q_pre, grip=PRE_OPENING)
+        arm = self.arm
+        arm.retract()
+        self.navigator.drive_to(tuple(q_pre[:3]), arm.tucked(), **FREE_MOTION)
+        arm.reach(q_pre, grip=PRE_OPENING)
         self.controller.settle(0.003)
         self.controller.move_through([q_grasp])
         self.controller.settle(0.002)
@@ -193,14 +194,14 @@ class PartMover:
 
     def _let_go(self) -> None:
         """Open the fingers, back the grip off along its approach axis, tuck the arm."""
-        robot = self.robot
-        if robot.folded:
+        arm = self.arm
+        if arm.folded:
             return
         self.controller.set_grip(PRE_OPENING, seconds=0.3)
         grip = self.world.data.site("robot/grip")
         rot = grip.xmat.reshape(3, 3)
-        result = robot.ik.solve(self.controller.target, grip.xpos - APPROACH * rot[:, 0], robot._held_quat(),
+        result = arm.ik.solve(self.controller.target, grip.xpos - APPROACH * rot[:, 0], arm.grip_quat(),
                                 base_cost=ARC_BASE_COST, seeds=False)
         if result.converged:
             self.controller.move_through([result.q])
-        robot.retract()
+        arm.retract()

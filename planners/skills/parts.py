@@ -22,7 +22,9 @@ from enum import Enum
 
 import numpy as np
 
+from homer_sim.graph import INSIDE
 from homer_sim.home.furniture import Furniture, furniture_geometry
+from homer_sim.home.spots import Spots
 from planners.grasps.geometry import axis_rotation, matrix_to_quat
 
 OPEN_TARGET = 0.96  # openness the opening motion aims for (success: above OPEN_OK)
@@ -165,3 +167,11 @@ def behind_a_door(furniture: Furniture) -> bool:
     """Whether `furniture` keeps its shelves behind a hinged door (a cupboard, the fridge): what stands inside is
     reached from the front, the hand held level or pitched down under the shelf above."""
     return any(part.joint == "hinge" for part in furniture_geometry(furniture).parts)
+
+
+def shelves_inside(spots: Spots, furniture: Furniture | None, node: str, relation: int | None) -> list[int]:
+    """Indices of the shelves inside `furniture` (named `node`; None for a room) behind a door that a place with
+    `relation` goes to; none for furniture without a door."""
+    if furniture is None or not behind_a_door(furniture):
+        return []
+    return [k for k, p in spots.places_of(node, relation) if p.relation == INSIDE and p.part is None]
