@@ -13,10 +13,12 @@ an apartment without a robot, so what the person would have moved unassisted is 
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from homer_sim.clock import DEFAULT_WINDOW_MIN
 from homer_sim.errors import HomerError
 from homer_sim.graph import INSIDE, ON, GraphError, SceneGraph
 from homer_sim.home.catalog import CATALOG
@@ -86,7 +88,7 @@ def containers_of(world: World) -> dict[str, tuple[str, ...]]:
 class Assistant:
     """The robot in an apartment with the person: `after_tick` is the executor's hook."""
 
-    def __init__(self, predictor, window_min: int = 30, threshold: float | None = None, recording=None,
+    def __init__(self, predictor, window_min: int = DEFAULT_WINDOW_MIN, threshold: float | None = None, recording=None,
                  rng: np.random.Generator | None = None) -> None:
         self.world = RecordedWorld(extras=[add_avatar, add_robot])
         self.world.recording = recording
@@ -280,12 +282,13 @@ class Assistant:
         self.recording.log_scene_graph(predicted, routine_minute=minute + self.window_min, entity="graph/predicted")
 
 
-def run_assisted(assistant: Assistant, entries, scripts, physics_rng: np.random.Generator,
-                 end_min: float | None = None) -> AssistLog:
-    """Live the day `entries` with the robot's help; returns the robot's log with the person's day in it. An action
-    the person cannot carry out (the robot left something in the way, say) ends the run; its reason is kept."""
+def run_assisted(assistant: Assistant, replay: Callable[..., DayLog], end_min: float | None = None) -> AssistLog:
+    """Live a day with the robot's help; returns the robot's log with the person's day in it. `replay` is the
+    day's `Generator.replay` with household, key and entries bound, so the assisted day is the reference day
+    by construction. An action the person cannot carry out (the robot left something in the way, say) ends the
+    run; its reason is kept."""
     try:
-        assistant.executor.run_day(entries, scripts, physics_rng, after_tick=assistant.after_tick, end_min=end_min)
+        replay(executor=assistant.executor, after_tick=assistant.after_tick, end_min=end_min)
     except HomerError as error:
         assistant.log.error = str(error)
         assistant._event(f"the person could not go on: {error}", assistant.executor.minute, "ERROR")

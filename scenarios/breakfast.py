@@ -12,12 +12,14 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
-from homer_sim.days import day_streams
+from homer_sim.clock import clock_text
 from homer_sim.person.executor import DayLog
+from homer_sim.recording import Recording
 from model.metrics import first_change
 from scenarios.assist import Assistant, AssistLog, run_assisted
 from scenarios.breakfast_data import DataSpec, check_meta, ensure_dataset, ensure_predictor, make_generator
@@ -140,22 +142,20 @@ def assisted_run(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec 
     predictor, trained_s = ensure_predictor(dataset, spec)
     stage("predictor (cached)" if trained_s == 0 else "predictor (trained)")
 
-    scripts = generator.scripts_for(spec.household)
     day = dataset.load(spec.household, morning.split)[morning.index]
     entries = [] if morning.skip_breakfast else [tuple(e) for e in day.schedule]
-    streams = lambda: day_streams(spec.seed, 0, morning.split, morning.index, day.seed)[1]  # noqa: E731
-    reference = generator.executor.run_day(entries, scripts, streams(), end_min=morning.end_min)
+    reference = generator.replay(spec.household, day.replay_key(), entries, end_min=morning.end_min)
     stage("reference replay")
 
     recording = None
     if rrd is not None:
-        from homer_sim.recording import Recording
 
         recording = Recording(rrd)
     assistant = Assistant(predictor, spec.window_min, recording=recording, rng=np.random.default_rng(spec.seed))
     if recording is not None:
         recording.log_geometry(assistant.world.model, assistant.world.data)
-    assist = run_assisted(assistant, entries, scripts, streams(), morning.end_min)
+    assist = run_assisted(assistant, partial(generator.replay, spec.household, day.replay_key(), entries),
+                          morning.end_min)
     stage("assisted run")
     if recording is not None:
         recording.close()
@@ -176,17 +176,14 @@ def assisted_run(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec 
 
 def format_summary(result: dict) -> list[str]:
     """Human-readable lines of a `run_breakfast` result."""
-    def clock(minute: float) -> str:
-        return f"{int(minute) // 60:02d}:{int(minute) % 60:02d}"
-
     lines = [f"{result['household']} {result['day']}: " + (", ".join(
-        f"{a} {clock(s)}-{clock(e)}" for a, s, e in result["schedule"]) or "no breakfast today"),
+        f"{a} {clock_text(s)}-{clock_text(e)}" for a, s, e in result["schedule"]) or "no breakfast today"),
         f"predictor {result['method']} (threshold {result['threshold']:.2f}), window {result['window_min']} min"]
     for r in result["relocations"]:
         status = "done" if r["done"] else f"FAILED: {r['reason']}"
         verdict = "correct" if r["correct"] else f"person would have moved it to {r['person_unassisted']}"
         why = "unused, put back" if r["put_back"] else f"p {r['confidence']:.2f}"
-        lines.append(f"  {clock(r['minute'])} {r['object']}: {r['from']} -> {r['to']} ({why}) "
+        lines.append(f"  {clock_text(r['minute'])} {r['object']}: {r['from']} -> {r['to']} ({why}) "
                      f"{status}; {verdict if r['done'] else ''}".rstrip("; "))
     lines.append(f"relocations planned {result['relocations_planned']}, done {result['relocations_done']}, "
                  f"correct {result['relocations_correct']}, wrong {result['relocations_wrong']}; robot busy "

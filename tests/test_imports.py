@@ -10,7 +10,7 @@ PACKAGES = ("homer_sim", "planners", "model", "scenarios")
 
 FLOORS: tuple[tuple[str, ...], ...] = (
     ("homer_sim.errors", "homer_sim.transforms", "homer_sim.graph", "homer_sim.days", "homer_sim.clock",
-     "homer_sim"),
+     "homer_sim.robot_spec", "homer_sim"),
     ("homer_sim.home",),
     ("homer_sim.world", "homer_sim.observe", "homer_sim.recording", "homer_sim.check"),
     ("homer_sim.person",),

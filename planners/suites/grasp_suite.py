@@ -6,7 +6,7 @@ the suite, not the robot: the apartment's settled start state, the doors or draw
 the object moved to its trial pose, the robot tucked in front of the furniture. From there on only physics
 moves anything. A trial succeeds when the object is at least MIN_LIFT m above its start, stays there for
 HOLD_SECONDS of physics, and slips less than MAX_SLIP m relative to the grip site meanwhile (no MuJoCo warning
-or NaN either). Classes that `planners.grasps.ungraspable_reason` rejects are listed as excluded, with that
+or NaN either). Classes that `planners.grasps.candidate.ungraspable_reason` rejects are listed as excluded, with that
 reason.
 
 mujoco and the planners that need it are imported inside the functions that run trials, so `homer --help`
@@ -272,8 +272,8 @@ def _stable_hash(text: str) -> int:
 
 def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: int, wall_s: float,
               extra: dict) -> dict:
-    """The `grasp-suite` JSON object from trial results (see DESIGN notes in the README for the keys
-    scripts rely on); failure reasons per class and timing are extra keys."""
+    """The `grasp-suite` JSON object from trial results: `trials`, `overall`, `per_class` and `excluded` keep
+    their meaning for scripts; failure reasons per class and timing are extra keys."""
     per_class: dict[str, dict] = {}
     for r in results:
         entry = per_class.setdefault(r.cls, {"trials": 0, "successes": 0, "failures": [],
