@@ -183,12 +183,7 @@ class Arm:
         above = grasp.position - grasp.approach * grasp.rotation[:, 0]
         obstacles = self.navigator.open_part_rects()
         here = [tuple(self.controller.target[:3])] if here_first else []
-        lean = grasp.rotation[:2, 0]
-        aside = (np.linalg.norm(lean) > PITCHED_HAND and np.linalg.norm(pull) > 0.0
-                 and float(lean @ -pull[:2]) < math.cos(ASIDE_LEAN) * float(np.linalg.norm(lean)))
-        candidates = base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2])
-        if aside:  # then also those facing into the furniture
-            candidates += base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2], -pull)
+        candidates = self._grasp_bases(grasp, pull)
         lifts = (SIDE_LIFT, LOW_SIDE_LIFT) if np.linalg.norm(pull) > 0.0 else (SIDE_LIFT,)  # a shelf grasp's first leg
         free = self.navigator.radius + CLEARANCE
         for base in [*here, *candidates]:
@@ -214,6 +209,18 @@ class Arm:
                 q_in[:3] = self.controller.target[:3]  # where the base really stopped
             return path_in, lift
         return None
+
+    def _grasp_bases(self, grasp: Grasp, pull: np.ndarray) -> list[tuple[float, float, float]]:
+        """Base poses (x m, y m, yaw rad) to try for `grasp` (see `base_candidates`): facing it along its
+        approach, then, where the approach leans more than ASIDE_LEAN aside of the way into the furniture
+        (against `pull`, shape (3,)), also facing into the furniture."""
+        lean = grasp.rotation[:2, 0]
+        aside = (np.linalg.norm(lean) > PITCHED_HAND and np.linalg.norm(pull) > 0.0
+                 and float(lean @ -pull[:2]) < math.cos(ASIDE_LEAN) * float(np.linalg.norm(lean)))
+        candidates = base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2])
+        if aside:  # then also those facing into the furniture
+            candidates += base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2], -pull)
+        return candidates
 
     def way_in(self, base: np.ndarray, q: np.ndarray, point: np.ndarray, quat: np.ndarray, direct: bool = False
                 ) -> list[np.ndarray] | None:

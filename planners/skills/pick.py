@@ -207,15 +207,7 @@ class Pick:
         shelf takes (side grasps, the fingers as deep on the object as they reach, then pitched ones), approached
         against `out`. With `replan`, once a failed grasp has moved the object (see `disturbed`), the grasps are
         planned again for where it now stands (the others were for where it stood)."""
-        furniture = self.navigator.furniture[node]
-        if out is None:
-            out = self.navigator.front_normal(node)
-            front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
-            grasps = shelf_grasps(cls, position, quat, out, front, neighbour_footprints(self.world, name))
-        else:  # side grasps, then pitched ones (a hand pointing straight down, or holding the object front to
-            front = -np.inf  # back, "-along", does not put it down under a shelf)
-            grasps = [g for g in shelf_grasps(cls, position, quat, out, front)
-                      if g.kind.pitch != 90 and not g.kind.along and not g.kind.roll]
+        grasps, out, front = self._shelf_candidates(name, node, cls, position, quat, out)
         if not grasps:
             return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
         unreachable, failures = [], []
@@ -248,6 +240,22 @@ class Pick:
             failures.append(f"{', '.join(map(str, unreachable))}: no free base pose reaches the grasp without the arm "
                             f"touching {node} or its contents")
         return SkillResult(False, f"{name}: every grasp in {node} failed ({'; '.join(failures)})")
+
+    def _shelf_candidates(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
+                          out: np.ndarray | None) -> tuple[list[Grasp], np.ndarray, float]:
+        """(grasps, out, front) for `_pick_from_shelf`: without `out`, the grasps of `name` inside cabinet `node`
+        approached against its front normal (`out`, shape (2,)), the front plane `front` m out from the object,
+        the palm clear of its neighbours; with `out`, those a shelf takes next (level, then pitched: a hand
+        pointing straight down, holding the object front to back or leaning aside does not put it down under a
+        shelf), approached against `out` from anywhere (`front` -inf)."""
+        if out is None:
+            furniture = self.navigator.furniture[node]
+            out = self.navigator.front_normal(node)
+            front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
+            return shelf_grasps(cls, position, quat, out, front, neighbour_footprints(self.world, name)), out, front
+        grasps = [g for g in shelf_grasps(cls, position, quat, out, -np.inf)
+                  if g.kind.pitch != 90 and not g.kind.along and not g.kind.roll]
+        return grasps, out, -np.inf
 
     def _try_grasp(self, name: str, grasp: Grasp, pull: np.ndarray | None = None,
                    path_in: list[np.ndarray] | None = None, first_lift: float = SIDE_LIFT) -> SkillResult:

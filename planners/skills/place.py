@@ -154,7 +154,6 @@ class Place:
             return SkillResult(False, f"place: no free spot for {name} inside {node}")
         posture, held = self.arm.carry(), self.arm.held_object(name)
         rotation = self._into_shelf(out)
-        quat = matrix_to_quat(rotation)
         up, pull = np.array([0.0, 0.0, 1.0]), np.array([out[0], out[1], 0.0])
         clear_out = np.linalg.norm(size) / 2 + ENTRY_OUT  # the object's centre this far out of the front: all out
         for spot in spots:
@@ -164,28 +163,37 @@ class Place:
             planned = self._drive_for(points, rotation, posture, held)
             if planned is None:
                 continue
-            ease, path_in = planned
-            self._ease_to(ease, path_in[0])
-            if self.arm.hand_empty():
-                self.arm.held = None
-                self.arm.retract()
-                return SkillResult(False, f"place: {name} fell out of the hand on the way into {node}")
-            now = self.arm.held_object(name)  # the object may have turned in the fingers on the way: aim it again
-            again = np.array(spot.pos) + np.array([0.0, 0.0, 0.01]) - rotation @ now.position
-            replanned = self.arm.checked_line(self.controller.target, [points[0], again + SIDE_LIFT * up, again],
-                                           quat, now)
-            slip = float(np.linalg.norm(now.position - held.position))
-            if replanned is not None:
-                path_in, release = [self.controller.target.copy(), *replanned], again
-            elif slip > CARRY_SLIP:  # still held, but no longer as planned: the caller puts it down elsewhere
-                return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand on the way into "
-                                          f"{node} and no longer goes in clear")
-            self.controller.move_through(path_in[1:])
-            self.controller.settle(0.003)
-            return self._let_go(name, node, float(np.mean(self.controller.q()[-2:])) + RELEASE_OPENING,
-                                self.arm.line(release, outside, quat, steps=4, loose_end=True), inside=True)
+            return self._go_in(name, node, np.array(spot.pos), rotation, held, planned, release, outside)
         return SkillResult(False, f"place: no free base pose puts {name} into {node} without it or the arm "
                                   f"touching {node} or its contents ({len(spots)} spots tried)")
+
+    def _go_in(self, name: str, node: str, spot: np.ndarray, rotation: np.ndarray, held: Held,
+               planned: tuple[list[np.ndarray], list[np.ndarray]], release: np.ndarray, outside: np.ndarray
+               ) -> SkillResult:
+        """Carry `held` (`name`) into cabinet `node` along `planned` (from `_drive_for`) and let it go on the
+        shelf at `spot` (m): eased in, aimed again where it turned in the fingers on the way (the grip site at
+        `release`, m, as planned, at `rotation`), down, released and drawn straight out to `outside` (m)."""
+        quat, up = matrix_to_quat(rotation), np.array([0.0, 0.0, 1.0])
+        ease, path_in = planned
+        self._ease_to(ease, path_in[0])
+        if self.arm.hand_empty():
+            self.arm.held = None
+            self.arm.retract()
+            return SkillResult(False, f"place: {name} fell out of the hand on the way into {node}")
+        now = self.arm.held_object(name)  # the object may have turned in the fingers on the way: aim it again
+        again = spot + np.array([0.0, 0.0, 0.01]) - rotation @ now.position
+        entry = outside + SIDE_LIFT * up
+        replanned = self.arm.checked_line(self.controller.target, [entry, again + SIDE_LIFT * up, again], quat, now)
+        slip = float(np.linalg.norm(now.position - held.position))
+        if replanned is not None:
+            path_in, release = [self.controller.target.copy(), *replanned], again
+        elif slip > CARRY_SLIP:  # still held, but no longer as planned: the caller puts it down elsewhere
+            return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand on the way into "
+                                      f"{node} and no longer goes in clear")
+        self.controller.move_through(path_in[1:])
+        self.controller.settle(0.003)
+        return self._let_go(name, node, float(np.mean(self.controller.q()[-2:])) + RELEASE_OPENING,
+                            self.arm.line(release, outside, quat, steps=4, loose_end=True), inside=True)
 
     def _into_shelf(self, out: np.ndarray) -> np.ndarray:
         """The grip rotation (shape (3, 3)) that carries the held object into a shelf whose front faces `out`
