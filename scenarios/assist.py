@@ -26,9 +26,9 @@ from homer_sim.person.avatar import add_avatar
 from homer_sim.person.executor import DayLog, Executor
 from homer_sim.recording import RecordedWorld
 from homer_sim.world import World
-from planners.control import FREE_MOTION
-from planners.grasps import ungraspable_reason
-from planners.navigation import NavigationError
+from planners.grasps.candidate import ungraspable_reason
+from planners.motion.control import FREE_MOTION
+from planners.motion.navigation import NavigationError
 from planners.robot import DEFAULT_POSE, add_robot
 from planners.skills import Robot, SkillResult
 from scenarios.psi import Holds, Plan, PlanStep, Relocation, psi, unused_help

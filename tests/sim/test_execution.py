@@ -185,7 +185,7 @@ def test_a_ray_run_resumes_a_stopped_local_run(ray_cluster, reference: Path, tmp
 
 
 def test_grasp_trials_on_ray_equal_the_local_ones(ray_cluster) -> None:
-    from planners.grasp_suite import run_suite, suite_classes
+    from planners.suites.grasp_suite import run_suite, suite_classes
 
     included, _ = suite_classes()
     classes = {cls: included[cls] for cls in ("mug", "cd")}
