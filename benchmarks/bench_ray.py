@@ -141,6 +141,7 @@ def main() -> None:
           "job": {"households": args.households, "days": days, "workers": args.workers, "repeats": args.repeats},
           "local_days_per_min": per_min["local"], "ray_days_per_min": per_min["ray"],
           "overhead": round(1.0 - per_min["ray"] / per_min["local"], 4),
+          "overhead_fastest": round(1.0 - min(walls["local"]) / min(walls["ray"]), 4),
           "task_overhead_ms": overhead["ray"], "local_task_overhead_ms": overhead["local"], "cpu_s_per_day": cpu,
           "wall_s": {name: summary(w, 2) for name, w in walls.items()}, "ray_start_s": summary(ray_start_s, 2),
           "worker_s_per_day": round(statistics.median(walls["local"]) * args.workers / days, 3),
