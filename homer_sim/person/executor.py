@@ -222,30 +222,60 @@ class Executor(Handling):
         after_tick: called after each snapshot with its grid minute (a robot acting, for instance); returns the
         routine minute its work ends, and actions due before then wait until then. end_min: stop after the
         snapshot at this minute (default: the whole day)."""
-        self.start_day(rng)
-        events = []
-        for activity, start, end in entries:
-            events += [(t, activity, a) for t, a in timed_actions(scripts[activity], start, end, rng)]
-            self.log.schedule.append((activity, float(start), float(end)))
-        last = max([DAY_END_MIN] + [end for _, _, end in entries])
-        grid = range(DAY_START_MIN, int(math.ceil(last / TICK_MIN)) * TICK_MIN + 1, TICK_MIN)
-        pending = iter(events)
-        event = next(pending, None)
-        current, free_at = None, -math.inf
-        for minute in grid:
-            if end_min is not None and minute > end_min:
-                break
-            while event is not None and event[0] < minute:
-                self.minute = max(event[0], free_at)
-                if event[1] != current and self.recording is not None:
-                    self.recording.log_event(f"{event[1]} starts", routine_minute=event[0])
-                current = event[1]
-                self._perform(event[1], event[2])
-                event = next(pending, None)
-            self.tick(minute)
+        day = DayRun(self, entries, scripts, rng, end_min)
+        free_at = -math.inf
+        while (minute := day.advance(free_at)) is not None:
             if after_tick is not None:
                 free_at = after_tick(minute)
         return self.log
+
+
+class DayRun:
+    """One day lived tick by tick: `advance` carries out the actions due before the next grid minute and takes
+    its snapshot, so a caller (the assisted-day task) can act between snapshots. `Executor.run_day` is this loop.
+    """
+
+    def __init__(self, executor: Executor, entries, scripts: Mapping, rng: np.random.Generator,
+                 end_min: float | None = None) -> None:
+        """Start the day (see `Executor.run_day` for the arguments); no action is carried out yet."""
+        self.executor = executor
+        executor.start_day(rng)
+        events = []
+        for activity, start, end in entries:
+            events += [(t, activity, a) for t, a in timed_actions(scripts[activity], start, end, rng)]
+            executor.log.schedule.append((activity, float(start), float(end)))
+        last = max([DAY_END_MIN] + [end for _, _, end in entries])
+        grid = range(DAY_START_MIN, int(math.ceil(last / TICK_MIN)) * TICK_MIN + 1, TICK_MIN)
+        self.grid = [m for m in grid if end_min is None or m <= end_min]  # routine minutes of the snapshots
+        self.ended_early = len(self.grid) < len(grid)  # end_min cut the day short
+        self._pending = iter(events)
+        self._event = next(self._pending, None)
+        self._current: str | None = None
+        self._next = 0
+
+    def advance(self, free_at: float = -math.inf) -> int | None:
+        """Carry out the actions due before the next grid minute (none starts before routine minute `free_at`)
+        and take that minute's snapshot; returns the minute, or None when the day is over."""
+        if self._next >= len(self.grid):
+            return None
+        minute = self.grid[self._next]
+        self._next += 1
+        executor = self.executor
+        while self._event is not None and self._event[0] < minute:
+            start, activity, action = self._event
+            executor.minute = max(start, free_at)
+            if activity != self._current and executor.recording is not None:
+                executor.recording.log_event(f"{activity} starts", routine_minute=start)
+            self._current = activity
+            executor._perform(activity, action)
+            self._event = next(self._pending, None)
+        executor.tick(minute)
+        return minute
+
+    @property
+    def over(self) -> bool:
+        """Whether every snapshot of the day has been taken."""
+        return self._next >= len(self.grid)
 
 
 def timed_actions(script, start: float, end: float, rng: np.random.Generator) -> list[tuple[float, object]]:
