@@ -24,7 +24,12 @@ from pathlib import Path
 import numpy as np
 
 from homer_sim.data.dataset import Dataset
+from homer_sim.data.generate import Generator, Sources
 from homer_sim.errors import HomerError, unknown_name
+from scenarios.env import AssistEnv, AssistTask, play
+from scenarios.episodes import dataset_day_plan
+from scenarios.policies import OraclePredictor, PsiPolicy
+from scenarios.scoring import day_result
 
 log = logging.getLogger(__name__)
 
@@ -36,13 +41,15 @@ COUNTS = ("relocations_planned", "relocations_done", "relocations_correct", "rel
 @dataclass(frozen=True)
 class EvalSpec:
     """One evaluation: the dataset folder, the method (a predictor name or `oracle`), the robot's seed, the
-    prediction window (min), and the folder of cached predictors."""
+    prediction window (min), the folder of cached predictors, and the routine minute each day stops after (None:
+    the whole day)."""
 
     data: str
     method: str = "markov"
     seed: int = 0
     window_min: int = 30
     checkpoints: str | None = None
+    end_min: int | None = None
 
     def checkpoint_folder(self) -> Path:
         return Path(self.checkpoints) if self.checkpoints else Path(self.data) / "checkpoints"
@@ -67,38 +74,24 @@ class DayRunner:
     """One worker's simulators: the assisted-day environment and the unassisted replay it is judged against."""
 
     def __init__(self, spec: EvalSpec) -> None:
-        from homer_sim.data.generate import Generator, Sources
-        from scenarios.env import AssistEnv, AssistTask
-
         self.spec = spec
         self.dataset = Dataset(spec.data)
         self.generator = Generator(Sources())
         self.env: AssistEnv | None = None
-        self._task = AssistTask
-        self._env = AssistEnv
         self.predictors: dict[str, object] = {}
 
     def run(self, household: str, index: int) -> dict:
         """The result of test day `index` of `household` (`scenarios.scoring.day_result` plus wall seconds)."""
-        from scenarios.env import play
-        from scenarios.policies import OraclePredictor, PsiPolicy
-        from scenarios.scoring import day_result
-
         started = time.perf_counter()
-        plan = self.day_plan(household, index)
+        plan = dataset_day_plan(self.dataset, self.generator, household, index, end_min=self.spec.end_min,
+                                robot_seed=self.spec.seed)
         if self.env is None:
-            self.env = self._env(self._task([plan], window_min=self.spec.window_min,
+            self.env = AssistEnv(AssistTask([plan], window_min=self.spec.window_min,
                                             reference=self.generator.executor))
         self.env.task.days = (plan,)
         timestep = self.env.reset()
         task = self.env.task
-        if self.spec.method == ORACLE:
-            predictor = OraclePredictor(task.reference, task.scene.movable)
-        else:
-            if household not in self.predictors:
-                self.predictors[household] = predictor_for(self.spec, self.dataset, household)
-            predictor = self.predictors[household]
-        policy = PsiPolicy(task.scene, predictor, self.spec.window_min)
+        policy = PsiPolicy(task.scene, self.predictor(household, task), self.spec.window_min)
         episode_return = play(self.env, timestep, policy)
         result = day_result(task.log, task.reference, task.scene.nodes, task.scene.categories, policy.plans,
                             self.spec.window_min)
@@ -106,20 +99,13 @@ class DayRunner:
                        "wall_s": round(time.perf_counter() - started, 2)})
         return result
 
-    def day_plan(self, household: str, index: int):
-        """Test day `index` of `household` as an episode: its schedule and physics stream as `homer generate`
-        drew them, and the robot's stream from (seed, household, day)."""
-        from homer_sim.days import day_streams
-        from scenarios.env import DayPlan
-
-        meta = self.dataset.meta
-        day = self.dataset.load(household, "test")[index]
-        h_index = meta.households.index(household)
-        data_seed = int(meta.extra.get("generator", {}).get("seed", 0))
-        streams = lambda: day_streams(data_seed, h_index, "test", index, day.seed)[1]  # noqa: E731
-        return DayPlan(household, f"test/{index}", tuple(tuple(e) for e in day.schedule),
-                       self.generator.scripts_for(household), streams,
-                       robot_seed=(self.spec.seed, h_index, index))
+    def predictor(self, household: str, task: AssistTask):
+        """The household's fitted predictor, or for `oracle` the replay of the task's current day."""
+        if self.spec.method == ORACLE:
+            return OraclePredictor(task.reference, task.scene.movable)
+        if household not in self.predictors:
+            self.predictors[household] = predictor_for(self.spec, self.dataset, household)
+        return self.predictors[household]
 
 
 # --- worker pool (as homer_sim.data.generate) -----------------------------------------------------------------

@@ -61,50 +61,63 @@ def run_full_day(rrd: Path | None, household: str) -> dict:
                                                              household=household)).result
 
 
+@dataclass(frozen=True)
+class MorningSetup:
+    """The assisted-day environment of a morning, the predictor fitted for its household, and the wall seconds
+    of making them (dataset, predictor)."""
+
+    env: AssistEnv
+    predictor: object
+    nodes: tuple[str, ...]
+    stages_s: dict[str, float]
+
+
+def morning_setup(morning: Morning = Morning(), spec: DataSpec | None = None, recording=None) -> MorningSetup:
+    """The cached dataset and predictor of `spec.household` (made on the first run) and an environment whose
+    episode is the day `morning` names."""
+    spec = spec or DataSpec()
+    started = time.perf_counter()
+    generator = make_generator()
+    dataset, generated_s = ensure_dataset(generator, spec)
+    check_meta(dataset.meta, generator.world.layout.node_names())
+    stages = {"dataset (cached)" if generated_s == 0 else "dataset (generated)": time.perf_counter() - started}
+    predictor, trained_s = ensure_predictor(dataset, spec)
+    stages["predictor (cached)" if trained_s == 0 else "predictor (trained)"] = (
+        time.perf_counter() - started - sum(stages.values()))
+    env = AssistEnv(AssistTask([morning_plan(generator, dataset, morning, spec)], seed=spec.seed,
+                               window_min=spec.window_min, reference=generator.executor, recording=recording))
+    return MorningSetup(env, predictor, dataset.meta.nodes, {k: round(v, 2) for k, v in stages.items()})
+
+
 def assisted_run(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec | None = None) -> MorningRun:
     """A day (or its morning) of `spec.household` with the robot helping, scored against the same day without it:
     the cached dataset and predictor, the assisted-day environment run by Psi (its reset replays the day without
     the robot), the recording; keeps the logs."""
     spec = spec or DataSpec()
-    stages: dict[str, float] = {}
-    clock = time.perf_counter()
-
-    def stage(name: str) -> None:
-        nonlocal clock
-        now = time.perf_counter()
-        stages[name] = round(now - clock, 2)
-        clock = now
-
-    generator = make_generator()
-    dataset, generated_s = ensure_dataset(generator, spec)
-    check_meta(dataset.meta, generator.world.layout.node_names())
-    stage("dataset (cached)" if generated_s == 0 else "dataset (generated)")
-    predictor, trained_s = ensure_predictor(dataset, spec)
-    stage("predictor (cached)" if trained_s == 0 else "predictor (trained)")
-
     recording = None
     if rrd is not None:
         from homer_sim.recording import Recording
 
         recording = Recording(rrd)
-    env = AssistEnv(AssistTask([morning_plan(generator, dataset, morning, spec)], seed=spec.seed,
-                               window_min=spec.window_min, reference=generator.executor, recording=recording))
+    setup = morning_setup(morning, spec, recording)
+    env, stages = setup.env, dict(setup.stages_s)
     if recording is not None:
         recording.log_geometry(env.task.world.model, env.task.world.data)
-    policy = PsiPolicy(env.scene, predictor, spec.window_min, recording=recording)
+    policy = PsiPolicy(env.scene, setup.predictor, spec.window_min, recording=recording)
+    started = time.perf_counter()
     episode_return = run_episode(env, policy)
-    stage("assisted run (and its reference replay)")
+    stages["assisted run (and its reference replay)"] = round(time.perf_counter() - started, 2)
     if recording is not None:
+        started = time.perf_counter()
         recording.close()
-        stage("recording")
+        stages["recording"] = round(time.perf_counter() - started, 2)
     assist, reference = env.task.log, env.task.reference
     result = day_result(assist, reference, env.scene.nodes, env.scene.categories, policy.plans, spec.window_min)
-    entries = env.task.day.entries
     result.update({"rrd": str(rrd) if rrd is not None else None, "household": spec.household,
-                   "day": f"{morning.split}/{morning.index}", "schedule": [list(e) for e in entries],
+                   "day": f"{morning.split}/{morning.index}", "schedule": [list(e) for e in env.task.day.entries],
                    "method": spec.method, "threshold": policy.threshold, "window_min": spec.window_min,
                    "return": episode_return, "stages_s": stages})
-    return MorningRun(result, assist, reference, dataset.meta.nodes)
+    return MorningRun(result, assist, reference, setup.nodes)
 
 
 def morning_plan(generator, dataset, morning: Morning, spec: DataSpec) -> DayPlan:

@@ -91,8 +91,9 @@ class AssistTask:
 
     def __init__(self, days: Sequence[DayPlan], seed: int = 0, window_min: int = 30,
                  reference: Executor | None = None, recording=None) -> None:
-        """days: the episodes, in turn. seed: the robot's random stream. reference: an executor in an apartment
-        without the robot for the unassisted replays (built when None)."""
+        """days: the episodes' days, in turn (`days` may be replaced between episodes). seed: the robot's random
+        stream. reference: an executor in an apartment without the robot for the unassisted replays (built when
+        None)."""
         if not days:
             raise HomerError("an assisted-day task needs at least one day")
         self.days = tuple(days)

@@ -55,6 +55,8 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     evaluate.add_argument("--seed", type=int, default=0, help="seed of the robot's random streams (default 0)")
     evaluate.add_argument("--window", type=positive_int, default=DataSpec.window_min,
                           help=f"prediction window in minutes (default {DataSpec.window_min})")
+    evaluate.add_argument("--until", type=positive_int, default=None, metavar="MINUTE",
+                          help="stop each day after the snapshot at this routine minute (default: the whole day)")
     evaluate.add_argument("--checkpoints", type=Path, default=None,
                           help="predictor cache folder (default DATA/checkpoints), shared with `homer evaluate`")
     evaluate.add_argument("--out", type=Path, default=None,
@@ -85,7 +87,7 @@ def cmd_assist_eval(args: argparse.Namespace) -> int:
     from scenarios.assist_eval import EvalSpec, assist_eval, markdown_table
 
     spec = EvalSpec(str(args.data), args.method, args.seed, args.window,
-                    str(args.checkpoints) if args.checkpoints else None)
+                    str(args.checkpoints) if args.checkpoints else None, args.until)
     households = [h.strip() for h in args.households.split(",") if h.strip()] if args.households else None
     result = assist_eval(spec, households, args.days, args.workers, args.out, progress=not args.quiet)
     emit(result, args.json, [markdown_table(result), f"written to {result['out']}"])
