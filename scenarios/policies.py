@@ -199,10 +199,11 @@ class OraclePredictor:
         self.params = {"threshold": 0.5}
 
     def rollout(self, observed: np.ndarray, minute: np.ndarray, steps: int) -> Rollout:
-        """The replay's parents at minute + 10, ..., minute + 10 * steps (the last snapshot past its end).
-        observed: Shape (B, N) (unused); minute: Shape (B,). Returns arrays of Shape (steps, B, N)."""
+        """The replay's parents at minute + 10, ..., minute + 10 * steps (the last snapshot past its end), each
+        with probability 1. observed: Shape (B, N) parents at the query; minute: Shape (B,). Returns arrays of
+        Shape (steps, B, N); `other` is the replay's parent where it differs from the observed one."""
         ahead = np.asarray(minute, dtype=float)[None, :] + self.grid_min * np.arange(1, steps + 1)[:, None]
         t = np.clip(np.searchsorted(self.minutes, ahead), 0, len(self.minutes) - 1)  # (S, B)
         parent = self.parents[t]
-        ones = np.ones(parent.shape, dtype=np.float32)
-        return Rollout(parent, ones, parent.copy(), np.zeros_like(ones))
+        moves = parent != np.asarray(observed)[None]
+        return Rollout(parent, np.ones(parent.shape, dtype=np.float32), parent.copy(), moves.astype(np.float32))

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from homer_sim.errors import HomerError
-from scenarios.env import MAX_RELOCATIONS, NO_RELOCATION, AssistEnv, play
+from scenarios.env import MAX_RELOCATIONS, NO_RELOCATION, AssistEnv
 from scenarios.episodes import Setup, make_setup
 from scenarios.policies import EmptyPolicy, PsiPolicy, RandomPolicy, action_of
 from scenarios.scoring import day_result
