@@ -102,7 +102,7 @@ class Helper:
         self._collateral(before, {r.obj for r in relocations}, minute)
         spent = (float(self.world.data.time) - started) / 60.0
         self.log.robot_minutes += spent
-        self._event(f"robot done after {spent:.1f} min", minute + spent)
+        self.event(f"robot done after {spent:.1f} min", minute + spent)
         return minute + spent
 
     def refuse(self, relocation: Relocation, minute: int, reason: str) -> None:
@@ -122,7 +122,7 @@ class Helper:
         by_obj = {r.obj: r for r in relocations}
         for step in steps:
             if self.robot.held is not None and step.action != "place":
-                self._event(f"robot stops the plan: it still holds {self.robot.held}", minute, "ERROR")
+                self.event(f"robot stops the plan: it still holds {self.robot.held}", minute, "ERROR")
                 break
             now = minute + (float(self.world.data.time) - started) / 60.0
             if self.recording is not None:
@@ -132,7 +132,7 @@ class Helper:
                 continue
             self.log.steps.append(StepOutcome(now, step, result.success, result.reason,
                                               float(self.world.data.time) - started))
-            self._event(f"robot {step.action} {step.target}: " + ("ok" if result.success else result.reason), now,
+            self.event(f"robot {step.action} {step.target}: " + ("ok" if result.success else result.reason), now,
                         "INFO" if result.success else "WARN")
             if step.action == "open" and not result.success:
                 failed_containers[step.node] = result.reason
@@ -153,7 +153,7 @@ class Helper:
                 return None
             result = self.robot.close_articulation(step.target)
             if not result.success:  # one more try: a door left open blocks the person
-                self._event(f"robot close {step.target} failed ({result.reason}); trying again", self.executor.minute,
+                self.event(f"robot close {step.target} failed ({result.reason}); trying again", self.executor.minute,
                             "WARN")
                 result = self.robot.close_articulation(step.target)
             return result
@@ -180,7 +180,7 @@ class Helper:
                       if f.name not in self.containers and self.robot.spots.places_of(f.name, ON))
         for node in [source, *(name for _, name in tops)][:FALLBACK_PLACES]:
             if node in self.robot.navigator.furniture and self.robot.place(node).success:
-                self._event(f"robot put {obj} down on {node} after the failed place", self.executor.minute, "WARN")
+                self.event(f"robot put {obj} down on {node} after the failed place", self.executor.minute, "WARN")
                 return
         log.warning("robot still holds %s" if self.robot.held == obj else "%s left the hand on the way", obj)
 
@@ -204,7 +204,7 @@ class Helper:
             name = self.world.object_names[i]
             if name not in asked:
                 self.log.collateral.append((minute, name, round(float(moved[i]), 3)))
-                self._event(f"robot displaced {name} by {moved[i] * 100:.0f} cm", minute, "WARN")
+                self.event(f"robot displaced {name} by {moved[i] * 100:.0f} cm", minute, "WARN")
 
     def robot_cells(self) -> np.ndarray:
         """Grid cells the person must not walk through: a disk around the robot's base."""
@@ -215,7 +215,7 @@ class Helper:
         blocked[np.hypot(xs - x, ys - y) < ROBOT_CLEARANCE_M] = True
         return blocked
 
-    def _event(self, text: str, minute: float, level: str = "INFO") -> None:
+    def event(self, text: str, minute: float, level: str = "INFO") -> None:
         log.info("%.1f min: %s", minute, text)
         if self.recording is not None:
             self.recording.log_event(text, routine_minute=minute, level=level)

@@ -224,7 +224,7 @@ class AssistTask:
             return self.run.advance(self.free_at)
         except HomerError as error:
             self.log.error = str(error)
-            self.helper._event(f"the person could not go on: {error}", self.executor.minute, "ERROR")
+            self.helper.event(f"the person could not go on: {error}", self.executor.minute, "ERROR")
             return None
 
     def _reference(self) -> Executor:
@@ -306,8 +306,8 @@ class AssistEnv(dm_env.Environment):
     def action_spec(self) -> specs.BoundedArray:
         return self.task.action_spec()
 
-    def render(self, height: int = 480, width: int = 640, azimuth: float = 90.0, elevation: float = -50.0,
-               distance: float = 11.0) -> np.ndarray:
+    def render(self, height: int = 480, width: int = 640, azimuth: float = 90.0, elevation: float = -60.0,
+               distance: float = 12.5) -> np.ndarray:
         """An RGB image of the apartment now, Shape (height, width, 3) uint8, from a free camera looking at the
         apartment's centre (`azimuth`, `elevation` in degrees, `distance` in m). Headless: set MUJOCO_GL=egl
         (or osmesa) before mujoco is imported."""

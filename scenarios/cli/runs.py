@@ -39,6 +39,21 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--json", action="store_true", help="print one JSON object")
     run.set_defaults(func=cmd_run)
 
+    render = subparsers.add_parser(
+        "render", help="a camera image of the apartment from a named assisted-day environment (PNG)",
+        description="Run the named environment's episode (Psi on its predictor, or nothing asked of the robot) up "
+        "to a routine minute and write an image of the apartment then. Headless: run with MUJOCO_GL=egl (or "
+        "osmesa) in the environment.")
+    render.add_argument("name", metavar="NAME", help="environment: breakfast, breakfast_skipped, day_household_a, ...")
+    render.add_argument("--until", type=positive_int, default=None, metavar="MINUTE",
+                        help="routine minute to stop the day after (default: the environment's own end)")
+    render.add_argument("--policy", choices=("psi", "empty"), default="psi", help="who asks the robot (default psi)")
+    render.add_argument("--size", type=positive_int, nargs=2, default=(480, 640), metavar=("HEIGHT", "WIDTH"),
+                        help="image size in pixels (default 480 640)")
+    render.add_argument("--out", type=Path, required=True, help="PNG file to write")
+    render.add_argument("--json", action="store_true", help="print one JSON object")
+    render.set_defaults(func=cmd_render)
+
     evaluate = subparsers.add_parser(
         "assist-eval", help="the assisted day on every test day of a dataset: relocations, fetch share, failures",
         description="For every test day of every household of a dataset made by `homer generate`: replay the day "
@@ -91,4 +106,33 @@ def cmd_assist_eval(args: argparse.Namespace) -> int:
     households = [h.strip() for h in args.households.split(",") if h.strip()] if args.households else None
     result = assist_eval(spec, households, args.days, args.workers, args.out, progress=not args.quiet)
     emit(result, args.json, [markdown_table(result), f"written to {result['out']}"])
+    return 0
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    import os
+
+    from homer_sim.errors import HomerError
+
+    if not os.environ.get("MUJOCO_GL"):
+        raise HomerError("rendering needs an offscreen GL context: run with MUJOCO_GL=egl (or MUJOCO_GL=osmesa)")
+    from matplotlib.image import imsave
+
+    from scenarios.env import run_episode
+    from scenarios.episodes import make_setup
+    from scenarios.policies import EmptyPolicy, PsiPolicy
+
+    setup = make_setup(args.name, **({} if args.until is None else {"end_min": args.until}))
+    env = setup.env
+    use_psi = args.policy == "psi" and setup.predictor is not None
+    episode_return = run_episode(env, PsiPolicy(env.scene, setup.predictor) if use_psi else EmptyPolicy(env.scene))
+    image = env.render(*args.size)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = args.out.with_name(args.out.stem + ".tmp.png")
+    imsave(tmp, image)
+    tmp.replace(args.out)
+    result = {"out": str(args.out), "minute": float(env.task.minute), "return": episode_return,
+              "shape": list(image.shape)}
+    emit(result, args.json, [f"wrote {args.out} ({image.shape[1]}x{image.shape[0]}) at routine minute "
+                             f"{result['minute']:.0f}, return {episode_return:g}"])
     return 0
