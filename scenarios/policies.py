@@ -151,8 +151,9 @@ class PsiPolicy:
     def _learn(self, outcomes: np.ndarray) -> None:
         """Remember what the robot did with the relocations asked for at the previous tick."""
         nodes = self.scene.nodes
-        for obj, _, _, done, ended, cause, minute in outcomes[outcomes[:, 0] != NO_RELOCATION]:
-            relocation = self._asked[nodes[obj]]
+        for obj, source, destination, done, ended, cause, minute in outcomes[outcomes[:, 0] != NO_RELOCATION]:
+            relocation = self._asked.get(nodes[obj]) or Relocation(nodes[obj], nodes[source], nodes[destination],
+                                                                   0, float("nan"))
             if relocation.put_back:  # tried once: if it failed, the predictor decides from now on
                 self.returns.pop(relocation.obj, None)
             if done and not relocation.put_back:
