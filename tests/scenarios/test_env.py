@@ -3,6 +3,7 @@ policies on the breakfast morning up to 07:20 (the robot sets the table at 06:40
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import dm_env
@@ -10,7 +11,7 @@ import numpy as np
 import pytest
 
 from homer_sim.errors import HomerError
-from scenarios.env import MAX_RELOCATIONS, NO_RELOCATION, AssistEnv
+from scenarios.env import MAX_RELOCATIONS, NO_RELOCATION, AssistEnv, make
 from scenarios.episodes import Setup, make_setup
 from scenarios.policies import EmptyPolicy, PsiPolicy, RandomPolicy, action_of
 from scenarios.scoring import day_result
@@ -60,6 +61,20 @@ def test_an_episode_is_one_day_with_specs_matched_at_every_timestep(setup: Setup
     assert obs["robot_holding"] == NO_RELOCATION and not obs["person_holding"].any()
     assert env.action_spec().shape == (MAX_RELOCATIONS, 2)
     assert env.step(action_of(scene, ())).first()  # a step after the last starts the next episode
+
+
+def test_the_whole_day_ends_in_a_termination_and_names_are_checked(setup: Setup) -> None:
+    env = setup.env
+    morning = env.task.days
+    env.task.days = tuple(replace(plan, end_min=None) for plan in morning)
+    try:
+        steps, total = _episode(env, EmptyPolicy(env.scene))
+    finally:
+        env.task.days = morning
+    assert steps[-1].last() and steps[-1].discount == 0.0 and total == 0.0
+    assert float(steps[-2].observation["minute"]) == 1440.0  # the last snapshot at midnight
+    with pytest.raises(HomerError, match="breakfast"):
+        make("brekfast")
 
 
 def test_actions_name_movable_objects_and_places_the_robot_can_put_them_on(setup: Setup) -> None:
