@@ -20,6 +20,7 @@ sys.path.insert(0, str(REPO_ROOT))
 
 from benchmarks._common import emit, machine_info, pin_to_one_core, positive_int, setup_logging, summary
 from homer_sim.data.generate import Generator, Sources, generate
+from homer_sim.days import DayKey  # noqa: E402
 
 log = logging.getLogger("benchmarks.generate")
 
@@ -30,12 +31,12 @@ TARGET_DATASET_S = 600.0
 def per_day(days: int, households: list[str] | None) -> dict:
     generator = Generator(Sources())
     names = households or list(generator.households)
-    generator.simulate(names[0], 0, "train", 999, 0)  # warm-up: compile caches, first paths
+    generator.simulate(names[0], DayKey(0, 0, "train", 999))  # warm-up: compile caches, first paths
     walls, physics, attempts = [], [], []
     for k in range(days):
         name = names[k % len(names)]
         started = time.perf_counter()
-        _, info = generator.simulate(name, list(generator.households).index(name), "train", k, 0)
+        _, info = generator.simulate(name, DayKey(0, list(generator.households).index(name), "train", k))
         walls.append(time.perf_counter() - started)
         physics.append(info["physics_s"])
         attempts.append(info["attempts"])

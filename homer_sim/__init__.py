@@ -1,3 +1,3 @@
 """homer-sim: proactive robot assistance in physics (a MuJoCo apartment, a scripted person, scene graphs)."""
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from homer_sim.observe import SceneGraphObserver
+from homer_sim.recording import Recording
 from homer_sim.world import World
 
 MAX_DRIFT_M = 0.005  # a settled object may move this far from its spawn pose
@@ -20,7 +21,6 @@ def run_world_check(rrd: Path | None = None, seconds: float = CHECK_SECONDS) -> 
     world = World()
     recording = None
     if rrd is not None:
-        from homer_sim.recording import Recording
 
         recording = Recording(rrd)
         recording.log_geometry(world.model, world.data)

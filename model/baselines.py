@@ -9,10 +9,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from homer_sim.clock import MINUTES_PER_DAY
 from homer_sim.data.dataset import GRID_MIN, DatasetMeta, Day
 from model.predictor import Predictor, Rollout, one_hot_parents, summarise_step
 
-MINUTES_PER_DAY = 1440
 MAX_HARMONIC = 48  # FreMEn's candidate periods: one day divided by k = 1 .. 48 (down to 30 minutes)
 PRIOR_FLOOR = 1e-6  # probability given to a candidate parent never observed, so no row is all zero
 

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from homer_sim.clock import DEFAULT_WINDOW_MIN
 from homer_sim.data.dataset import Dataset, DatasetMeta, Day
 from model.methods import check_method, load_predictor, make_predictor, save_predictor
 from model.metrics import Counts, Queries, day_queries, gate, score, window_steps
@@ -29,7 +30,7 @@ from model.predictor import ModelError, Predictor, Rollout
 
 log = logging.getLogger(__name__)
 VAL_FRACTION = 0.1
-HEADLINE_WINDOW_MIN = 30
+HEADLINE_WINDOW_MIN = DEFAULT_WINDOW_MIN
 CURVE_WINDOWS_MIN = tuple(range(10, 130, 10))
 MAX_UNUSED_WRONG_PCT = 1.0  # tuning keeps at least 99% of unused objects in place when any setting can
 TUNING_VERSION = 2  # bump when the tuning rule or a grid changes: cached tunings are then redone

@@ -14,8 +14,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from homer_sim.clock import MINUTES_PER_DAY
 from homer_sim.data.dataset import GRID_MIN, DatasetMeta, Day
-from model.baselines import MINUTES_PER_DAY
 from model.predictor import THRESHOLDS, Predictor, transitions
 
 SLOTS = MINUTES_PER_DAY // GRID_MIN  # 144 ten-minute slots per day

@@ -15,7 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from homer_sim.data.dataset import GRID_MIN, DatasetMeta, Day, write_day, write_meta
+from homer_sim.clock import DAY_END_MIN, DAY_START_MIN, GRID_MIN
+from homer_sim.data.dataset import DatasetMeta, Day, write_day, write_meta
 from homer_sim.graph import INSIDE, NONE, ON
 
 ROOMS = ("bathroom", "dining_room", "bedroom", "home_office", "outside")
@@ -122,7 +123,7 @@ NOISE_OBJECTS = ("magazine", "newspaper", "pen", "notebook", "mail", "candle", "
 NOISE_PLACES = ("table_dining_room", "sofa_home_office", "bed", "table_bedroom", "desk_home_office",
                 "bathroom_counter", "bench", "kitchen_counter_right", "table_home_office", "sofa_bedroom")
 SMALL_ACTIVITIES = ("breakfast", "brushing_teeth", "showering")
-DAY_START_MIN, DAY_END_MIN = 360, 1430  # first and last grid minute
+LAST_GRID_MIN = DAY_END_MIN - GRID_MIN
 
 
 @dataclass(frozen=True)
@@ -271,7 +272,7 @@ def sample_day(apartment: Apartment, house: Household, split: str, index: int, r
 def day_from_events(apartment: Apartment, household: str, split: str, index: int, events: list[Event],
                     schedule: tuple[tuple[str, float, float], ...] = ()) -> Day:
     """Apply timed moves (minute, object, destination) to the start layout and sample the 10-minute grid."""
-    minutes = np.arange(DAY_START_MIN, DAY_END_MIN + 1, GRID_MIN, dtype=np.int32)
+    minutes = np.arange(DAY_START_MIN, LAST_GRID_MIN + 1, GRID_MIN, dtype=np.int32)
     parent, relation = apartment.home_parent.copy(), apartment.home_relation.copy()
     parents, relations, moves, cursor = [], [], [], 0
     events = sorted(events)

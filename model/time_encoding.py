@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import torch
 
+from homer_sim.clock import MINUTES_PER_DAY
 from homer_sim.errors import HomerError
 
 PERIODS_MIN = (1440.0, 720.0, 360.0, 180.0, 60.0, 30.0, 10.0)  # 1 day, 12 h, 6 h, 3 h, 1 h, 30 min, 10 min
 TIME_ENCODINGS = ("periodic", "linear")
-MINUTES_PER_DAY = 1440.0
 
 
 class TimeEncodingError(HomerError):

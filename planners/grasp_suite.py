@@ -272,8 +272,8 @@ def _stable_hash(text: str) -> int:
 
 def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: int, wall_s: float,
               extra: dict) -> dict:
-    """The `grasp-suite` JSON object from trial results (see DESIGN notes in the README for the keys
-    scripts rely on); failure reasons per class and timing are extra keys."""
+    """The `grasp-suite` JSON object from trial results: `trials`, `overall`, `per_class` and `excluded` keep
+    their meaning for scripts; failure reasons per class and timing are extra keys."""
     per_class: dict[str, dict] = {}
     for r in results:
         entry = per_class.setdefault(r.cls, {"trials": 0, "successes": 0, "failures": [],

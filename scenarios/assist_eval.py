@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from homer_sim.clock import DEFAULT_WINDOW_MIN
 from homer_sim.data.dataset import Dataset
 from homer_sim.data.generate import Generator, Sources
 from homer_sim.errors import HomerError, unknown_name
@@ -47,7 +48,7 @@ class EvalSpec:
     data: str
     method: str = "markov"
     seed: int = 0
-    window_min: int = 30
+    window_min: int = DEFAULT_WINDOW_MIN
     checkpoints: str | None = None
     end_min: int | None = None
 
@@ -83,7 +84,7 @@ class DayRunner:
     def run(self, household: str, index: int) -> dict:
         """The result of test day `index` of `household` (`scenarios.scoring.day_result` plus wall seconds)."""
         started = time.perf_counter()
-        plan = dataset_day_plan(self.dataset, self.generator, household, index, end_min=self.spec.end_min,
+        plan = dataset_day_plan(self.dataset, household, index, end_min=self.spec.end_min,
                                 robot_seed=self.spec.seed)
         if self.env is None:
             self.env = AssistEnv(AssistTask([plan], window_min=self.spec.window_min,

@@ -14,7 +14,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from homer_sim.days import day_streams
+from homer_sim.clock import clock_text
 from homer_sim.person.executor import DayLog
 from scenarios.assist import AssistLog
 from scenarios.breakfast_data import DataSpec, check_meta, ensure_dataset, ensure_predictor, make_generator
@@ -84,7 +84,7 @@ def morning_setup(morning: Morning = Morning(), spec: DataSpec | None = None, re
     predictor, trained_s = ensure_predictor(dataset, spec)
     stages["predictor (cached)" if trained_s == 0 else "predictor (trained)"] = (
         time.perf_counter() - started - sum(stages.values()))
-    env = AssistEnv(AssistTask([morning_plan(generator, dataset, morning, spec)], seed=spec.seed,
+    env = AssistEnv(AssistTask([morning_plan(dataset, morning, spec)], seed=spec.seed,
                                window_min=spec.window_min, reference=generator.executor, recording=recording))
     return MorningSetup(env, predictor, dataset.meta.nodes, {k: round(v, 2) for k, v in stages.items()})
 
@@ -120,28 +120,23 @@ def assisted_run(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec 
     return MorningRun(result, assist, reference, setup.nodes)
 
 
-def morning_plan(generator, dataset, morning: Morning, spec: DataSpec) -> DayPlan:
+def morning_plan(dataset, morning: Morning, spec: DataSpec) -> DayPlan:
     """The day `morning` names in the cached dataset of `spec`, as an episode of the assisted-day task."""
     day = dataset.load(spec.household, morning.split)[morning.index]
     entries = () if morning.skip_breakfast else tuple(tuple(e) for e in day.schedule)
-    streams = lambda: day_streams(spec.seed, 0, morning.split, morning.index, day.seed)[1]  # noqa: E731
-    return DayPlan(spec.household, f"{morning.split}/{morning.index}", entries, generator.scripts_for(spec.household),
-                   streams, morning.end_min)
+    return DayPlan(spec.household, day.replay_key(), entries, morning.end_min)
 
 
 def format_summary(result: dict) -> list[str]:
     """Human-readable lines of a `run_breakfast` result."""
-    def clock(minute: float) -> str:
-        return f"{int(minute) // 60:02d}:{int(minute) % 60:02d}"
-
     lines = [f"{result['household']} {result['day']}: " + (", ".join(
-        f"{a} {clock(s)}-{clock(e)}" for a, s, e in result["schedule"]) or "no breakfast today"),
+        f"{a} {clock_text(s)}-{clock_text(e)}" for a, s, e in result["schedule"]) or "no breakfast today"),
         f"predictor {result['method']} (threshold {result['threshold']:.2f}), window {result['window_min']} min"]
     for r in result["relocations"]:
         status = "done" if r["done"] else f"FAILED: {r['reason']}"
         verdict = "correct" if r["correct"] else f"person would have moved it to {r['person_unassisted']}"
         why = "unused, put back" if r["put_back"] else f"p {r['confidence']:.2f}"
-        lines.append(f"  {clock(r['minute'])} {r['object']}: {r['from']} -> {r['to']} ({why}) "
+        lines.append(f"  {clock_text(r['minute'])} {r['object']}: {r['from']} -> {r['to']} ({why}) "
                      f"{status}; {verdict if r['done'] else ''}".rstrip("; "))
     lines.append(f"relocations planned {result['relocations_planned']}, done {result['relocations_done']}, "
                  f"correct {result['relocations_correct']}, wrong {result['relocations_wrong']}; robot busy "

@@ -22,13 +22,19 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from homer_sim import __version__
+from homer_sim.clock import DEFAULT_WINDOW_MIN, HOURS_PER_DAY
 from homer_sim.data.dataset import Dataset, DatasetMeta, day_path, write_day, write_meta
-from homer_sim.person.households import ACTIVITIES, HOURS, OPTIONAL, Household
+from homer_sim.data.generate import Generator, Sources
+from homer_sim.days import DayKey
+from homer_sim.errors import HomerError
+from homer_sim.person.aliases import Resolver
+from homer_sim.person.households import ACTIVITIES, OPTIONAL, Household
+from homer_sim.person.scripts import parse_script
 
 log = logging.getLogger(__name__)
 
 HOUSEHOLD = "breakfast_only"
-BREAKFAST_HABIT = (0.0, 1.0) + (0.0,) * (HOURS - 2)  # starts at 07:00; its length (16-28 min) varies
+BREAKFAST_HABIT = (0.0, 1.0) + (0.0,) * (HOURS_PER_DAY - 2)  # starts at 07:00; its length (16-28 min) varies
 CACHE_ENV = "HOMER_SIM_CACHE"
 
 
@@ -40,7 +46,7 @@ class DataSpec:
     test_days: int = 2
     seed: int = 0
     method: str = "markov"  # the graph network trains at ~50 s per epoch on 2 shared cores: too slow for a demo
-    window_min: int = 30
+    window_min: int = DEFAULT_WINDOW_MIN
     household: str = HOUSEHOLD  # or one of the project's households (a full assisted day)
 
 
@@ -100,7 +106,7 @@ clear it that is not mid-meal (with the packaged scripts the person clears up th
 
 def breakfast_household(variant: int = 0) -> Household:
     """Breakfast (script `variant` of the library; `make_generator` adds BREAKFAST_SCRIPT) and nothing else."""
-    habits = {a: (0.0,) * HOURS for a in ACTIVITIES}
+    habits = {a: (0.0,) * HOURS_PER_DAY for a in ACTIVITIES}
     habits["breakfast"] = BREAKFAST_HABIT
     variants = {a: 0 for a in ACTIVITIES} | {"breakfast": variant}
     return Household(HOUSEHOLD, "Only breakfast, at 07:00.", habits, variants, OPTIONAL)
@@ -116,9 +122,6 @@ def cache_root() -> Path:
 
 def make_generator(recording=None):
     """The project's day generator with the breakfast household added to its households."""
-    from homer_sim.data.generate import Generator, Sources
-    from homer_sim.person.aliases import Resolver
-    from homer_sim.person.scripts import parse_script
 
     generator = Generator(Sources(), recording=recording)
     script = parse_script(BREAKFAST_SCRIPT, "scenarios/breakfast_data.py", "breakfast", "demo",
@@ -145,7 +148,7 @@ def ensure_dataset(generator, spec: DataSpec) -> tuple[Dataset, float]:
     started = time.perf_counter()
     house = spec.household
     meta = generator.meta([house], {"generator": {"seed": spec.seed, "household": house, "homer_sim": __version__}})
-    h_index = 0 if house == HOUSEHOLD else list(generator.households).index(house)  # as `homer generate` seeds
+    h_index = 0 if house == HOUSEHOLD else list(generator.households).index(house)  # as `homer generate` numbers
     if not (folder / "meta.json").is_file():
         write_meta(folder, meta)
     made = 0
@@ -153,7 +156,7 @@ def ensure_dataset(generator, spec: DataSpec) -> tuple[Dataset, float]:
         for index in range(count):
             if day_path(folder, house, split, index).exists():
                 continue
-            day, info = generator.simulate(house, h_index, split, index, spec.seed)
+            day, info = generator.simulate(house, DayKey(spec.seed, h_index, split, index))
             write_day(folder, day)
             made += 1
             log.info("%s dataset: %s day %d in %.1f s", house, split, index, info["wall_s"])
@@ -163,7 +166,7 @@ def ensure_dataset(generator, spec: DataSpec) -> tuple[Dataset, float]:
 def ensure_predictor(dataset: Dataset, spec: DataSpec, progress: bool = False):
     """The predictor fitted and tuned on the training days (cached checkpoint); returns it and wall seconds
     spent fitting (0 when cached)."""
-    from model.evaluate import FitSpec, fit_tuned, split_days
+    from model.evaluate import FitSpec, fit_tuned, split_days  # torch: imported when a predictor is needed
 
     fit, val = split_days(dataset.load(spec.household, "train"))
     fit_spec = FitSpec(spec.method, tuple(fit), tuple(val))
@@ -177,7 +180,6 @@ def ensure_predictor(dataset: Dataset, spec: DataSpec, progress: bool = False):
 
 def check_meta(meta: DatasetMeta, nodes: tuple[str, ...]) -> None:
     """The dataset's nodes must be the apartment's (the predictor indexes nodes by position)."""
-    from homer_sim.errors import HomerError
 
     if tuple(meta.nodes) != tuple(nodes):
         raise HomerError(f"the cached dataset has {len(meta.nodes)} nodes, the apartment {len(nodes)}; "

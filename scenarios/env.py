@@ -25,6 +25,9 @@ import dm_env
 import numpy as np
 from dm_env import specs
 
+from homer_sim.clock import DEFAULT_WINDOW_MIN, GRID_MIN
+from homer_sim.data.generate import Generator, Sources
+from homer_sim.days import DayKey
 from homer_sim.errors import HomerError
 from homer_sim.graph import SceneGraph
 from homer_sim.home.catalog import CATALOG
@@ -72,28 +75,30 @@ class SceneInfo:
 
 @dataclass(frozen=True)
 class DayPlan:
-    """One episode's day: the household, a label (`split/index`), the schedule entries (activity, start min,
-    end min), the household's scripts, a function giving a fresh physics random stream of the day (the same
-    stream for the reference and the assisted run), the routine minute to stop after (None: the whole day), and
-    the seed of the robot's own random stream for the day (None: the task's stream goes on from the last day)."""
+    """One episode's day: the household, the day's identity (its physics stream, the same for the reference and
+    the assisted run), the schedule entries (activity, start min, end min), the routine minute to stop after
+    (None: the whole day), and the seed of the robot's own random stream for the day (None: the task's stream
+    goes on from the last day)."""
 
     household: str
-    label: str
+    key: DayKey
     entries: tuple[tuple[str, float, float], ...]
-    scripts: Mapping
-    physics_rng: Callable[[], np.random.Generator]
     end_min: int | None = None
     robot_seed: tuple[int, ...] | None = None
+
+    @property
+    def label(self) -> str:
+        return f"{self.key.split}/{self.key.index}"
 
 
 class AssistTask:
     """The assisted day's lifecycle over a World with the person and the robot (see the module doc)."""
 
-    def __init__(self, days: Sequence[DayPlan], seed: int = 0, window_min: int = 30,
-                 reference: Executor | None = None, recording=None) -> None:
+    def __init__(self, days: Sequence[DayPlan], seed: int = 0, window_min: int = DEFAULT_WINDOW_MIN,
+                 reference: Generator | None = None, recording=None) -> None:
         """days: the episodes' days, in turn (`days` may be replaced between episodes). seed: the robot's random
-        stream. reference: an executor in an apartment without the robot for the unassisted replays (built when
-        None)."""
+        stream. reference: the generator (an apartment without the robot, the households' scripts) that replays
+        the days unassisted (built when None)."""
         if not days:
             raise HomerError("an assisted-day task needs at least one day")
         self.days = tuple(days)
@@ -104,7 +109,7 @@ class AssistTask:
         self.executor = Executor(self.world, recording=recording)
         self.rng = np.random.default_rng(seed)
         self.helper = Helper(self.world, self.executor, self.rng, recording)
-        self._reference_executor = reference
+        self.generator = reference or Generator(Sources())
         self.scene = scene_info(self.world, self.executor)
         self.episodes = 0
         self.log = self.helper.log
@@ -120,14 +125,14 @@ class AssistTask:
             self.helper = Helper(self.world, self.executor, rng, self.recording)
         self.episodes += 1
         self.day = day
-        self.reference = self._reference().run_day(list(day.entries), day.scripts, day.physics_rng(),
-                                                   end_min=day.end_min)
+        self.reference = self.generator.replay(day.household, day.key, list(day.entries), end_min=day.end_min)
         self.log = self.helper.log
         self.fetches = Fetches(self.reference, set(self.scene.layout.room_names()), self.window_min)
         self.busy_until, self.free_at, self.reward = 0.0, -np.inf, 0.0
         self.outcomes: list = []
         self.ended = False
-        self.run = DayRun(self.executor, list(day.entries), day.scripts, day.physics_rng(), day.end_min)
+        scripts = self.generator.scripts_for(day.household)  # the stream of Generator.replay, stepped here
+        self.run = DayRun(self.executor, list(day.entries), scripts, day.key.streams()[1], day.end_min)
         self.minute = self._advance()
 
     def before_step(self, action: np.ndarray) -> None:
@@ -142,7 +147,7 @@ class AssistTask:
             if relocations:
                 self.busy_until = self.free_at
         self.outcomes = self.log.relocations[first:]
-        wrong = sum(o.done and not is_correct(o, self.reference, self.scene.index, self.window_min // 10)
+        wrong = sum(o.done and not is_correct(o, self.reference, self.scene.index, self.window_min // GRID_MIN)
                     for o in self.outcomes)
         self.reward = float(self.fetches.credit(self.log.relocations, up_to=minute) - wrong)
 
@@ -226,13 +231,6 @@ class AssistTask:
             self.log.error = str(error)
             self.helper.event(f"the person could not go on: {error}", self.executor.minute, "ERROR")
             return None
-
-    def _reference(self) -> Executor:
-        if self._reference_executor is None:
-            from homer_sim.world import World
-
-            self._reference_executor = Executor(World(extras=[add_avatar]))
-        return self._reference_executor
 
     def _relocations(self, action: np.ndarray, minute: int) -> list[Relocation]:
         """The relocations `action` asks for; those the robot cannot attempt now are recorded as not done."""

@@ -6,6 +6,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from homer_sim.clock import DEFAULT_WINDOW_MIN
 from homer_sim.errors import unknown_name
 from scenarios.env import AssistEnv, AssistTask, DayPlan
 from scenarios.registry import FULL_DAY_HOUSEHOLDS
@@ -19,22 +20,16 @@ class Setup:
     predictor: object | None
 
 
-def dataset_day_plan(dataset, generator, household: str, index: int, split: str = "test",
-                     end_min: int | None = None, robot_seed: int | None = None) -> DayPlan:
+def dataset_day_plan(dataset, household: str, index: int, split: str = "test", end_min: int | None = None,
+                     robot_seed: int | None = None) -> DayPlan:
     """Day `index` of `split` of `household` in a dataset made by `homer generate`, as an episode: its schedule
-    and physics stream as the generator drew them, and the robot's stream from (robot_seed, household, day)."""
-    from homer_sim.days import day_streams
-
-    meta = dataset.meta
-    if household not in meta.households:
-        raise unknown_name("household", household, meta.households)
+    and its key (the physics stream it was drawn with), and the robot's stream from (robot_seed, household, day)."""
+    if household not in dataset.meta.households:
+        raise unknown_name("household", household, dataset.meta.households)
     day = dataset.load(household, split)[index]
-    h_index = meta.households.index(household)
-    data_seed = int(meta.extra.get("generator", {}).get("seed", 0))
-    streams = lambda: day_streams(data_seed, h_index, split, index, day.seed)[1]  # noqa: E731
-    seed = None if robot_seed is None else (robot_seed, h_index, index)
-    return DayPlan(household, f"{split}/{index}", tuple(tuple(e) for e in day.schedule),
-                   generator.scripts_for(household), streams, end_min, robot_seed=seed)
+    key = day.replay_key()
+    seed = None if robot_seed is None else (robot_seed, key.household, index)
+    return DayPlan(household, key, tuple(tuple(e) for e in day.schedule), end_min, robot_seed=seed)
 
 
 def _breakfast(skip_breakfast: bool = False, **options) -> Setup:
@@ -59,15 +54,15 @@ def _full_day(household: str) -> Callable[..., Setup]:
 
 
 def _dataset_day(data: str, household: str, index: int = 0, split: str = "test", end_min: int | None = None,
-                 method: str | None = None, seed: int = 0, window_min: int = 30, checkpoints: str | None = None,
-                 recording=None) -> Setup:
+                 method: str | None = None, seed: int = 0, window_min: int = DEFAULT_WINDOW_MIN,
+                 checkpoints: str | None = None, recording=None) -> Setup:
     from homer_sim.data.dataset import Dataset
     from homer_sim.data.generate import Generator, Sources
     from scenarios.assist_eval import EvalSpec, predictor_for
 
     dataset = Dataset(data)
     generator = Generator(Sources())
-    plan = dataset_day_plan(dataset, generator, household, index, split, end_min, seed)
+    plan = dataset_day_plan(dataset, household, index, split, end_min, seed)
     env = AssistEnv(AssistTask([plan], window_min=window_min, reference=generator.executor, recording=recording))
     spec = EvalSpec(str(data), method or "markov", seed, window_min, checkpoints)
     return Setup(env, predictor_for(spec, dataset, household) if method else None)

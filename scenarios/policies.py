@@ -15,6 +15,7 @@ from collections.abc import Mapping, Sequence
 import dm_env
 import numpy as np
 
+from homer_sim.clock import DEFAULT_WINDOW_MIN, GRID_MIN
 from homer_sim.graph import INSIDE, ON, GraphError, SceneGraph
 from homer_sim.home.layout import Layout
 from homer_sim.person.executor import DayLog
@@ -92,12 +93,12 @@ class RandomPolicy:
 class PsiPolicy:
     """The paper's robot as a policy: predict, plan with Psi, remember the help it gave (see the module doc)."""
 
-    def __init__(self, scene: SceneInfo, predictor, window_min: int = 30, threshold: float | None = None,
-                 recording=None) -> None:
+    def __init__(self, scene: SceneInfo, predictor, window_min: int = DEFAULT_WINDOW_MIN,
+                 threshold: float | None = None, recording=None) -> None:
         self.scene = scene
         self.predictor = predictor
         self.window_min = window_min
-        self.window_steps = window_min // 10
+        self.window_steps = window_min // GRID_MIN
         tuned = max(float(predictor.params["threshold"]), ROBOT_MIN_THRESHOLD)
         self.threshold = tuned if threshold is None else float(threshold)
         self.recording = recording
@@ -192,7 +193,7 @@ class OraclePredictor:
 
     Has the `rollout`, `movable` and `params` a `PsiPolicy` uses from a predictor."""
 
-    def __init__(self, reference: DayLog, movable: np.ndarray, grid_min: int = 10) -> None:
+    def __init__(self, reference: DayLog, movable: np.ndarray, grid_min: int = GRID_MIN) -> None:
         self.minutes = np.asarray(reference.minutes)
         self.parents = np.asarray(reference.parents, dtype=np.int64)  # (T, N)
         self.movable = np.asarray(movable, dtype=bool)

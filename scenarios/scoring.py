@@ -13,6 +13,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from homer_sim.clock import GRID_MIN
 from homer_sim.person.executor import DayLog
 from model.metrics import first_change
 from scenarios.assist import AssistLog, RelocationOutcome
@@ -117,7 +118,7 @@ def end_state(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...]) -> d
 
 
 def day_result(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...], categories: tuple[str, ...],
-               plans: Sequence[tuple[int, Plan]], window_min: int, grid_min: int = 10) -> dict:
+               plans: Sequence[tuple[int, Plan]], window_min: int, grid_min: int = GRID_MIN) -> dict:
     """Everything measured on one assisted run (JSON-ready): `score`, `fetches` and `end_state`, the robot's
     minutes and skill calls, collateral (objects displaced that no relocation named), failures by cause, the
     person's observed moves and why they stopped early, if they did."""

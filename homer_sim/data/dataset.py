@@ -1,6 +1,6 @@
 """The HOMER-like dataset format: types, writing and reading. numpy and json only (no mujoco, no rerun).
 
-Layout of a dataset folder (format version 1):
+Layout of a dataset folder (format version 2):
 
     DIR/meta.json                      nodes, categories, movable mask, households, grid, format version
     DIR/<household>/<split>/day_NNN.npz  one simulated day (split is "train" or "test")
@@ -10,8 +10,10 @@ A day file holds, for T grid steps every `grid_min` routine minutes and N nodes:
     minutes   (T,)   int32   routine minute of each step (minutes since midnight)
     parent    (T, N) int16   each node's parent index at that step, -1 for rooms
     relation  (T, N) int8    0 none (rooms), 1 ON, 2 INSIDE
-    info      ()     str     JSON: household, split, index, seed, schedule [[activity, start, end]], moves
-                             [[minute, object, from, to, relation]]
+    info      ()     str     JSON: household, split, index, key (the `DayKey` the day was simulated from:
+                             seed, household index, split, index, attempt), schedule [[activity, start,
+                             end]], moves [[minute, object, from, to, relation]]
+Version 1 files have no key (only the attempt, as "seed"): they read, but their days cannot be replayed.
 Parent arrays are compact (T x N), never dense N x N adjacency. Files are written to a temporary name and
 renamed, so a day is either complete or absent; zip entries carry a fixed timestamp, so the same day gives
 the same bytes.
@@ -29,11 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
+from homer_sim.clock import GRID_MIN
+from homer_sim.days import DayKey
 from homer_sim.errors import HomerError
 from homer_sim.graph import SceneGraph
 
-FORMAT_VERSION = 1
-GRID_MIN = 10
+FORMAT_VERSION = 2
+READABLE_VERSIONS = (1, 2)  # version 1 days have no DayKey
 SPLITS = ("train", "test")
 _ZIP_DATE = (1980, 1, 1, 0, 0, 0)
 
@@ -63,8 +67,9 @@ class DatasetMeta:
 
     @classmethod
     def from_json(cls, raw: dict) -> DatasetMeta:
-        if raw.get("version") != FORMAT_VERSION:
-            raise DatasetError(f"dataset format version {raw.get('version')!r}; this homer-sim reads {FORMAT_VERSION}")
+        if raw.get("version") not in READABLE_VERSIONS:
+            raise DatasetError(f"dataset format version {raw.get('version')!r}; this homer-sim reads versions "
+                               f"{', '.join(map(str, READABLE_VERSIONS))}: generate the dataset again")
         known = {"version", "grid_min", "nodes", "categories", "movable", "households"}
         return cls(tuple(raw["nodes"]), tuple(raw["categories"]), tuple(bool(m) for m in raw["movable"]),
                    tuple(raw["households"]), int(raw["grid_min"]), int(raw["version"]),
@@ -83,7 +88,7 @@ class Day:
     relation: np.ndarray
     schedule: tuple[tuple[str, float, float], ...] = ()
     moves: tuple[tuple[float, str, str, str, str], ...] = ()
-    seed: int = 0
+    key: DayKey | None = None  # None for days of format version 1
 
     def __post_init__(self) -> None:
         t, n = self.parent.shape
@@ -98,8 +103,16 @@ class Day:
         return SceneGraph(meta.nodes, meta.categories, self.parent[step], self.relation[step])
 
     def info(self) -> dict:
-        return {"household": self.household, "split": self.split, "index": self.index, "seed": self.seed,
+        return {"household": self.household, "split": self.split, "index": self.index,
+                "key": self.key.to_json() if self.key is not None else None,
                 "schedule": [list(s) for s in self.schedule], "moves": [list(m) for m in self.moves]}
+
+    def replay_key(self) -> DayKey:
+        """The key to replay this day with; a DatasetError for a day saved without one."""
+        if self.key is None:
+            raise DatasetError(f"day {self.household}/{self.split}/{self.index} predates day keys (dataset format "
+                               "version 1) and cannot be replayed: generate the dataset again")
+        return self.key
 
 
 def day_path(root: Path, household: str, split: str, index: int) -> Path:
@@ -141,7 +154,8 @@ def read_day(path: str | Path) -> Day:
             return Day(info["household"], info["split"], int(info["index"]), archive["minutes"],
                        archive["parent"], archive["relation"],
                        tuple((a, float(s), float(e)) for a, s, e in info["schedule"]),
-                       tuple((float(m[0]), *m[1:]) for m in info["moves"]), int(info.get("seed", 0)))
+                       tuple((float(m[0]), *m[1:]) for m in info["moves"]),
+                       DayKey.from_json(info["key"]) if info.get("key") else None)
     except FileNotFoundError:
         raise DatasetError(f"{path}: no such day file") from None
     except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError) as error:

@@ -1,7 +1,7 @@
 """Dataset generation: households live sampled days in physics; each day becomes one file.
 
-A day is simulated from the start layout with two random streams seeded from (seed, household, split, day,
-attempt); a day that fails (it ends outside, an object falls out, a placement cannot be found) is retried
+A day is simulated from the start layout with two random streams seeded from its `DayKey` (seed, household,
+split, day, attempt); a day that fails (it ends outside, an object falls out, a placement cannot be found) is retried
 with the next attempt and logged. Day files are written atomically, so an interrupted run resumes where it
 stopped and the bytes never depend on the number of workers. Timings go to `generation.log` only.
 """
@@ -12,16 +12,25 @@ import json
 import logging
 import multiprocessing
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from homer_sim import __version__
 from homer_sim.data.dataset import DatasetMeta, Day, day_path, write_day, write_meta
 from homer_sim.data.stats import LOG_NAME
+from homer_sim.days import DayKey
 from homer_sim.errors import HomerError
+from homer_sim.person.activities import load_library
+from homer_sim.person.aliases import Resolver
+from homer_sim.person.avatar import add_avatar
+from homer_sim.person.executor import DayLog, Executor
+from homer_sim.person.households import load_homer_habits, load_households
+from homer_sim.person.sampler import sample_schedule
+from homer_sim.world import World
 
 log = logging.getLogger(__name__)
 
@@ -40,12 +49,6 @@ class Generator:
     """One worker's simulator: a World with an avatar, an executor, households and scripts."""
 
     def __init__(self, sources: Sources, recording=None) -> None:
-        from homer_sim.person.activities import load_library
-        from homer_sim.person.aliases import Resolver
-        from homer_sim.person.avatar import add_avatar
-        from homer_sim.person.executor import Executor
-        from homer_sim.person.households import load_homer_habits, load_households
-        from homer_sim.world import World
 
         self.world = World(extras=[add_avatar])
         self.executor = Executor(self.world, recording=recording)
@@ -65,32 +68,42 @@ class Generator:
             chosen[activity] = options[variants.get(activity, 0) % len(options)]
         return chosen
 
-    def simulate(self, household: str, h_index: int, split: str, index: int, seed: int) -> tuple[Day, dict]:
-        """Simulate one day, retrying failed attempts; returns the day and its log record."""
-        from homer_sim.days import day_streams
-        from homer_sim.person.sampler import sample_schedule
+    def schedule(self, household: str, key: DayKey) -> list[tuple[str, float, float]]:
+        """The (activity, start_min, end_min) entries of `household`'s day `key`, drawn from its schedule stream."""
 
-        scripts = self.scripts_for(household)
-        durations = {a: s.duration_range for a, s in scripts.items()}
+        durations = {a: s.duration_range for a, s in self.scripts_for(household).items()}
+        schedule = sample_schedule(self.households[household], durations, key.streams()[0])
+        return [(e.activity, e.start_min, e.end_min) for e in schedule.entries]
+
+    def replay(self, household: str, key: DayKey, entries: Sequence[tuple[str, float, float]], executor=None,
+               **run_options) -> DayLog:
+        """Live `entries` of `household` with the physics stream of `key`, in this generator's world or in
+        `executor`'s (a world with a robot, say): the same day by construction whenever the key and entries
+        are a dataset day's. run_options go to `Executor.run_day` (after_tick, end_min)."""
+        executor = executor or self.executor
+        return executor.run_day(entries, self.scripts_for(household), key.streams()[1], **run_options)
+
+    def simulate(self, household: str, key: DayKey) -> tuple[Day, dict]:
+        """Simulate day `key` of `household`, drawing it again (the key's next attempt) while an attempt fails;
+        returns the day and its log record."""
         started, failures = time.perf_counter(), []
-        for attempt in range(MAX_ATTEMPTS):
-            schedule_rng, physics_rng = day_streams(seed, h_index, split, index, attempt)
+        for _ in range(MAX_ATTEMPTS):
             try:
-                schedule = sample_schedule(self.households[household], durations, schedule_rng)
-                entries = [(e.activity, e.start_min, e.end_min) for e in schedule.entries]
-                record = self.executor.run_day(entries, scripts, physics_rng)
+                record = self.replay(household, key, self.schedule(household, key))
             except HomerError as error:  # a failed attempt: log it and sample again
                 failures.append(f"{type(error).__name__}: {error}")
-                log.info("%s/%s/%d attempt %d failed: %s", household, split, index, attempt, error)
+                log.info("%s %s: failed: %s", household, key, error)
+                key = key.next_attempt()
                 continue
-            day = Day(household, split, index, np.array(record.minutes, dtype=np.int32),
+            day = Day(household, key.split, key.index, np.array(record.minutes, dtype=np.int32),
                       np.array(record.parents, dtype=np.int16), np.array(record.relations, dtype=np.int8),
-                      tuple(record.schedule), tuple(record.moves), seed=attempt)
-            info = {"household": household, "split": split, "day": index, "attempts": attempt + 1,
+                      tuple(record.schedule), tuple(record.moves), key)
+            info = {"household": household, "split": key.split, "day": key.index, "attempts": key.attempt + 1,
                     "failures": failures, "wall_s": round(time.perf_counter() - started, 3),
                     "physics_s": round(float(self.world.data.time), 2)}  # the day starts at time 0
             return day, info
-        raise HomerError(f"{household}/{split}/day {index}: all {MAX_ATTEMPTS} attempts failed; last: {failures[-1]}")
+        raise HomerError(f"{household}/{key.split}/day {key.index}: all {MAX_ATTEMPTS} attempts failed; "
+                         f"last: {failures[-1]}")
 
     def meta(self, households: list[str], extra: dict) -> DatasetMeta:
         graph = self.world.declared_graph()
@@ -113,9 +126,9 @@ def _run_task(task: tuple) -> tuple[Day, dict]:
     return _WORKER.simulate(*task)
 
 
-def day_tasks(households: list[str], train_days: int, test_days: int, seed: int) -> list[tuple]:
-    """(household, household index, split, day index, seed) for every day of the dataset."""
-    return [(name, h, split, d, seed) for h, name in enumerate(households)
+def day_tasks(households: list[str], train_days: int, test_days: int, seed: int) -> list[tuple[str, DayKey]]:
+    """(household, first key) for every day of the dataset; households are numbered in the habits' order."""
+    return [(name, DayKey(seed, h, split, d)) for h, name in enumerate(households)
             for split, count in (("train", train_days), ("test", test_days)) for d in range(count)]
 
 
@@ -133,7 +146,8 @@ def generate(out: Path, n_households: int, train_days: int, test_days: int, seed
     meta = probe.meta(names, extra)
     _check_existing(out, meta)
     write_meta(out, meta)
-    tasks = [t for t in day_tasks(names, train_days, test_days, seed) if not day_path(out, t[0], t[2], t[3]).exists()]
+    tasks = [(house, key) for house, key in day_tasks(names, train_days, test_days, seed)
+             if not day_path(out, house, key.split, key.index).exists()]
     started = time.perf_counter()
     with open(out / LOG_NAME, "a") as log_file:
         for day, info in _progress(_results(tasks, workers, sources, probe), len(tasks), progress):
@@ -155,7 +169,6 @@ def _results(tasks: list[tuple], workers: int, sources: Sources, probe: Generato
 
 
 def _progress(results, total: int, enabled: bool):
-    from tqdm import tqdm
 
     return tqdm(results, total=total, desc="days", unit="day", disable=not enabled, dynamic_ncols=True)
 
@@ -168,6 +181,9 @@ def _check_existing(out: Path, meta: DatasetMeta) -> None:
             raise HomerError(f"{out} exists and is not a homer-sim dataset; choose an empty or new folder")
         return
     existing = json.loads(path.read_text())
+    if existing.get("version") != meta.version:
+        raise HomerError(f"{out} holds a dataset of format version {existing.get('version')}; this homer-sim writes "
+                         f"version {meta.version}: generate into a new folder")
     if existing.get("generator") != meta.extra["generator"] or existing.get("nodes") != list(meta.nodes):
         raise HomerError(f"{out} holds a dataset generated with other settings ({existing.get('generator')}); "
                          "use another folder")

@@ -5,6 +5,7 @@ Shared by the layout validator (robot envelope), and later the avatar's and the 
 
 from __future__ import annotations
 
+import heapq
 from dataclasses import dataclass
 
 import numpy as np
@@ -160,7 +161,6 @@ def _nearest_free(grid: np.ndarray, plan: FloorPlan, xy: tuple[float, float]) ->
 
 
 def _astar(grid: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> list[tuple[int, int]] | None:
-    import heapq
 
     diagonal = 2 ** 0.5
     moves = [(1, 0, 1.0), (-1, 0, 1.0), (0, 1, 1.0), (0, -1, 1.0),

@@ -19,7 +19,7 @@ from homer_sim.errors import HomerError
 from homer_sim.graph import INSIDE, ON
 from homer_sim.home.catalog import CATALOG
 from homer_sim.home.floorplan import floor_plan, inflate
-from homer_sim.home.furniture import Place, furniture_geometry
+from homer_sim.home.furniture import Place, footprint, furniture_geometry, local_to_world
 from homer_sim.home.placement import SPOT_GAP, base_height, place_world, stored_yaw
 from homer_sim.home.validate import base_pose_for
 
@@ -205,7 +205,6 @@ class Spots:
 def _keep_out_rects(layout) -> list[tuple[float, float, float, float]]:
     """World rectangles in front of doors and drawers (their swing and a person's room to use them), where
     nothing may be left on the floor."""
-    from homer_sim.home.furniture import local_to_world
 
     rects = []
     for f in layout.furniture:
@@ -234,7 +233,6 @@ def _overlaps_any(boxes: np.ndarray, rect: tuple[float, float, float, float]) ->
 
 
 def _footprint_rect(f) -> tuple[float, float, float, float]:
-    from homer_sim.home.furniture import footprint
 
     return footprint(f)
 

@@ -12,6 +12,7 @@ from collections.abc import Iterable, Mapping
 from functools import cache
 
 from homer_sim.errors import UnknownNameError, unknown_name
+from homer_sim.home.apartment import default_layout
 
 ALIASES: dict[str, str] = {
     # Class names of furniture we have several of, or name after their room: the instance scripts mean.
@@ -84,6 +85,5 @@ class Resolver:
 @cache
 def default_resolver() -> Resolver:
     """The resolver of the default apartment (`homer_sim.home.apartment.default_layout`)."""
-    from homer_sim.home.apartment import default_layout
 
     return Resolver(default_layout().node_names())

@@ -11,11 +11,15 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from homer_sim.errors import HomerError
 from homer_sim.person.activities import script_files
 from homer_sim.person.aliases import Resolver
+from homer_sim.person.avatar import add_avatar
+from homer_sim.person.executor import ActionError, Executor
 from homer_sim.person.scripts import Script, ScriptError, parse_script
+from homer_sim.world import World
 
 START_MIN = 480.0  # routine minute a compatibility run starts at (08:00)
 HANDLING = ("grab", "putback", "putin", "putobjback", "puton", "putoff", "drop")
@@ -57,11 +61,7 @@ def run_script(executor, script: Script, seed: int = 0) -> None:
 
 def compat_check(scripts_dir: str | Path, progress: bool = False) -> dict:
     """{"scripts", "executed", "failures": [{"script", "line", "reason"}]} over every .txt file of the folder."""
-    from tqdm import tqdm
 
-    from homer_sim.person.avatar import add_avatar
-    from homer_sim.person.executor import ActionError, Executor
-    from homer_sim.world import World
 
     root = Path(scripts_dir)
     files = script_files(root)

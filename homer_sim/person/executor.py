@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from homer_sim.clock import DAY_END_MIN, DAY_START_MIN, GRID_MIN
 from homer_sim.errors import HomerError
 from homer_sim.graph import INSIDE, RELATION_NAMES, SceneGraph
 from homer_sim.home.floorplan import find_path
@@ -26,9 +27,6 @@ from homer_sim.world import World
 
 log = logging.getLogger(__name__)
 
-TICK_MIN = 10
-DAY_START_MIN = 360
-DAY_END_MIN = 1440
 
 
 class ActionError(HomerError):
@@ -217,7 +215,7 @@ class Executor(Handling):
     def run_day(self, entries, scripts: Mapping, rng: np.random.Generator,
                 after_tick: Callable[[int], float] | None = None, end_min: float | None = None) -> DayLog:
         """Live one day: `entries` are (activity, start_min, end_min) in time order, `scripts` maps each
-        activity to the script this household uses. Snapshots every TICK_MIN routine minutes.
+        activity to the script this household uses. Snapshots every GRID_MIN routine minutes.
 
         after_tick: called after each snapshot with its grid minute (a robot acting, for instance); returns the
         routine minute its work ends, and actions due before then wait until then. end_min: stop after the
@@ -245,7 +243,7 @@ class DayRun:
             events += [(t, activity, a) for t, a in timed_actions(scripts[activity], start, end, rng)]
             executor.log.schedule.append((activity, float(start), float(end)))
         last = max([DAY_END_MIN] + [end for _, _, end in entries])
-        grid = range(DAY_START_MIN, int(math.ceil(last / TICK_MIN)) * TICK_MIN + 1, TICK_MIN)
+        grid = range(DAY_START_MIN, int(math.ceil(last / GRID_MIN)) * GRID_MIN + 1, GRID_MIN)
         self.grid = [m for m in grid if end_min is None or m <= end_min]  # routine minutes of the snapshots
         self.ended_early = len(self.grid) < len(grid)  # end_min cut the day short
         self._pending = iter(events)

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from homer_sim.clock import DAY_START_MIN, HOURS_PER_DAY
 from homer_sim.errors import HabitError, unknown_name
 
 COMPULSORY: tuple[str, ...] = ("brushing_teeth", "showering", "breakfast", "dinner", "lunch")
@@ -30,10 +31,8 @@ OPTIONAL: tuple[str, ...] = (
 ACTIVITIES: tuple[str, ...] = COMPULSORY + OPTIONAL
 """The 22 activities of HOMER, spelled as HOMER spells them (`vaccuum_cleaning` included)."""
 
-HOURS = 18
-"""Hourly slots per day; slot i covers routine minutes [360 + 60 i, 420 + 60 i)."""
-FIRST_HOUR = 6
-"""Clock hour of slot 0 (06:00)."""
+FIRST_HOUR = DAY_START_MIN // 60
+"""Clock hour of habit slot 0; slot i covers routine minutes [DAY_START_MIN + 60 i, DAY_START_MIN + 60 (i + 1))."""
 DEFAULT_PATH = Path(__file__).resolve().parent / "households.json"
 HOMER_FILES = ("cluster_histograms.json", "optimized_persona.json")
 HOMER_ORDER_SEED = 20_211_021
@@ -108,8 +107,8 @@ def _check_names(household: str, what: str, mapping: Mapping[str, object]) -> No
 
 def _check_hourly(where: str, habit: tuple[float, ...]) -> None:
     """18 values in [0, 1]; `where` opens the error message."""
-    if len(habit) != HOURS:
-        raise HabitError(f"{where}: habit has {len(habit)} values; expected {HOURS} (one per hour 06:00-24:00)")
+    if len(habit) != HOURS_PER_DAY:
+        raise HabitError(f"{where}: habit has {len(habit)} values; expected {HOURS_PER_DAY} (one per hour 06:00-24:00)")
     for index, value in enumerate(habit):
         if not 0.0 <= value <= 1.0:  # also rejects NaN
             raise HabitError(f"{where}: value {value!r} at {FIRST_HOUR + index:02d}:00 is outside [0, 1]")
@@ -149,7 +148,7 @@ def _read_json(path: Path) -> object:
 def _hourly(values: object, where: str) -> tuple[float, ...]:
     """A JSON list of numbers as floats (length and range are checked by Household)."""
     if not isinstance(values, list):
-        raise HabitError(f"{where}: habit must be a list of {HOURS} numbers, got {type(values).__name__}")
+        raise HabitError(f"{where}: habit must be a list of {HOURS_PER_DAY} numbers, got {type(values).__name__}")
     for value in values:
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise HabitError(f"{where}: habit value {value!r} is not a number")
@@ -221,7 +220,7 @@ def _homer_habits(persona: str, choice: object, clusters: Mapping[str, list[tupl
                   path: Path) -> dict[str, tuple[float, ...]]:
     if not isinstance(choice, dict):
         raise HabitError(f"{path}: household {persona!r}: expected an object activity -> cluster index")
-    habits = {activity: (0.0,) * HOURS for activity in ACTIVITIES}
+    habits = {activity: (0.0,) * HOURS_PER_DAY for activity in ACTIVITIES}
     for activity, index in choice.items():
         where = f"{path}: household {persona!r}: activity {activity!r}"
         if activity not in ACTIVITIES:

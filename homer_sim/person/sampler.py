@@ -36,13 +36,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from homer_sim.days import day_streams
+from homer_sim.clock import DAY_END_MIN, DAY_START_MIN, HOURS_PER_DAY
+from homer_sim.days import DayKey
 from homer_sim.errors import HomerError, unknown_name
-from homer_sim.person.households import ACTIVITIES, FIRST_HOUR, HOURS, Household
+from homer_sim.person.households import ACTIVITIES, FIRST_HOUR, Household
 
-DAY_START_MIN = 360.0
 """06:00, the first decision time."""
-DAY_END_MIN = 1440.0
 """24:00: no activity starts at or after it."""
 IDLE_MIN = 10.0
 """Minutes the person waits when no activity is chosen."""
@@ -104,7 +103,7 @@ class Schedule:
 
 def hour_slot(minute: float) -> int:
     """The habit slot (0..17) of a routine minute; times outside 06:00-24:00 clip to the first or last slot."""
-    return min(max(int(minute // 60) - FIRST_HOUR, 0), HOURS - 1)
+    return min(max(int(minute // 60) - FIRST_HOUR, 0), HOURS_PER_DAY - 1)
 
 
 def _check_durations(household: Household, durations: Mapping[str, tuple[float, float]]) -> None:
@@ -154,7 +153,7 @@ def sample_schedule(household: Household, durations: Mapping[str, tuple[float, f
     order = household.order
     matrix = household.habit_matrix(order)  # (22, 18)
     total_by_hour = float(matrix.sum(axis=0).max())  # R
-    columns = [matrix[:, hour].tolist() for hour in range(HOURS)]
+    columns = [matrix[:, hour].tolist() for hour in range(HOURS_PER_DAY)]
     come_habit = household.habits[COME]
     entries: list[list] = []  # [activity, start, end]
     last_end: dict[str, float] = {}
@@ -196,18 +195,14 @@ def _start(entries: list[list], last_end: dict[str, float], activity: str, minut
     return end
 
 
-def sample_day(household: Household, durations: Mapping[str, tuple[float, float]], seed: int,
-               household_index: int, split: str, day: int, max_attempts: int = 100) -> tuple[Schedule, int]:
-    """The schedule of one dataset day and the attempt that produced it (days ending outside are redrawn).
-
-    Attempt k uses the schedule stream of `day_streams(seed, household_index, split, day, k)`; the caller
-    takes the physics stream of the same attempt.
-    """
-    for attempt in range(max_attempts):
-        schedule_rng, _ = day_streams(seed, household_index, split, day, attempt)
+def sample_day(household: Household, durations: Mapping[str, tuple[float, float]], key: DayKey,
+               max_attempts: int = 100) -> tuple[Schedule, DayKey]:
+    """The schedule of day `key` and the key of the attempt that produced it (days ending outside are drawn
+    again with the next attempt's schedule stream); the caller takes the physics stream of that key."""
+    for _ in range(max_attempts):
         try:
-            return sample_schedule(household, durations, schedule_rng), attempt
+            return sample_schedule(household, durations, key.streams()[0]), key
         except DayEndedOutside:
-            continue
-    raise DayEndedOutside(f"household {household.name!r}: every one of {max_attempts} attempts of {split} day "
-                          f"{day} ended outside")
+            key = key.next_attempt()
+    raise DayEndedOutside(f"household {household.name!r}: every one of {max_attempts} attempts of {key.split} day "
+                          f"{key.index} ended outside")

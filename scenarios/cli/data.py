@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from homer_sim.clock import clock_text
+from homer_sim.days import DayKey
 from homer_sim.errors import HomerError
 from scenarios.cli.common import emit
 
@@ -48,14 +50,15 @@ def cmd_simulate_day(args: argparse.Namespace) -> int:
         from homer_sim.errors import unknown_name
 
         raise unknown_name("household", args.household, names)
-    day, info = generator.simulate(args.household, names.index(args.household), args.split, args.day, args.seed)
+    key = DayKey(args.seed, names.index(args.household), args.split, args.day)
+    day, info = generator.simulate(args.household, key)
     if recording is not None:
         recording.close()
     moves = int(((day.parent[1:] != day.parent[:-1])).sum())
     result = {"household": args.household, "steps": day.steps, "grid_moves": moves, "schedule": day.schedule,
               "events": len(day.moves), "attempts": info["attempts"], "wall_s": info["wall_s"],
               "rrd": str(args.rrd) if args.rrd else None}
-    lines = [f"{a:<22} {int(s) // 60:02d}:{int(s) % 60:02d}-{int(e) // 60:02d}:{int(e) % 60:02d}"
+    lines = [f"{a:<22} {clock_text(s)}-{clock_text(e)}"
              for a, s, e in day.schedule]
     lines.append(f"{day.steps} grid steps, {moves} object moves between steps, {info['wall_s']} s wall")
     emit(result, args.json, lines)

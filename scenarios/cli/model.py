@@ -9,10 +9,9 @@ import argparse
 import json
 from pathlib import Path
 
+from homer_sim.clock import DEFAULT_WINDOW_MIN as HEADLINE_WINDOW_MIN
 from model.names import DEFAULT_METHODS, METHODS
 from model.report import format_table
-
-HEADLINE_WINDOW_MIN = 30
 
 
 def _methods(text: str) -> list[str]:

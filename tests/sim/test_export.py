@@ -24,8 +24,8 @@ def exported(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def reference() -> mujoco.MjModel:
-    return World().model
+def reference(apartment: World) -> mujoco.MjModel:
+    return apartment.model
 
 
 @pytest.fixture(scope="module")

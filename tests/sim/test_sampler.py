@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from homer_sim.days import day_streams
+from homer_sim.days import DayKey
 from homer_sim.errors import HomerError, UnknownNameError
 from homer_sim.person.households import ACTIVITIES, OPTIONAL, Household, load_households
 from homer_sim.person.sampler import (
@@ -42,7 +42,7 @@ def _household(**habits: dict[int, float]) -> Household:
 
 
 def _days(household: Household, durations: dict, days: int = DAYS, seed: int = 7) -> list[Schedule]:
-    return [sample_schedule(household, durations, day_streams(seed, 0, "train", day)[0]) for day in range(days)]
+    return [sample_schedule(household, durations, DayKey(seed, 0, "train", day).streams()[0]) for day in range(days)]
 
 
 def _start_hours(schedules: list[Schedule], activity: str) -> np.ndarray:
@@ -59,31 +59,33 @@ def _start_hours(schedules: list[Schedule], activity: str) -> np.ndarray:
 def sampled() -> dict[str, list[Schedule]]:
     """300 days of every packaged household with the typical durations."""
     households = load_households()
-    return {name: [sample_day(household, TYPICAL_DURATIONS, 3, index, "train", day)[0] for day in range(300)]
+    return {name: [sample_day(household, TYPICAL_DURATIONS, DayKey(3, index, "train", day))[0] for day in range(300)]
             for index, (name, household) in enumerate(households.items())}
 
 
-def test_day_streams_come_from_the_coordinates_only() -> None:
-    schedule, physics = day_streams(1, 2, "test", 3, 4)
+def test_day_streams_come_from_the_key_only() -> None:
+    schedule, physics = DayKey(1, 2, "test", 3, 4).streams()
     expected = [np.random.default_rng(child).random(3) for child in np.random.SeedSequence([1, 2, 1, 3, 4]).spawn(2)]
     assert np.array_equal(schedule.random(3), expected[0]) and np.array_equal(physics.random(3), expected[1])
-    first = {day_streams(*coords)[0].random() for coords in
+    first = {DayKey(*coords).streams()[0].random() for coords in
              [(1, 2, "test", 3, 4), (0, 2, "test", 3, 4), (1, 0, "test", 3, 4), (1, 2, "train", 3, 4),
               (1, 2, "test", 0, 4), (1, 2, "test", 3, 0)]}
     assert len(first) == 6
-    code = "from homer_sim.days import day_streams; print(repr(day_streams(1, 2, 'test', 3, 4)[1].random()))"
+    code = "from homer_sim.days import DayKey; print(repr(DayKey(1, 2, 'test', 3, 4).streams()[1].random()))"
     other_process = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert float(other_process.stdout) == expected[1][0]
     with pytest.raises(UnknownNameError, match="unknown split 'tset'; closest known: test"):
-        day_streams(1, 2, "tset", 3)
-    with pytest.raises(HomerError, match="day must be a non-negative integer"):
-        day_streams(1, 2, "test", -3)
+        DayKey(1, 2, "tset", 3)
+    with pytest.raises(HomerError, match="index must be a non-negative integer"):
+        DayKey(1, 2, "test", -3)
+    assert DayKey(1, 2, "test", 3).next_attempt() == DayKey(1, 2, "test", 3, 1)
+    assert DayKey.from_json(DayKey(1, 2, "test", 3, 4).to_json()) == DayKey(1, 2, "test", 3, 4)
 
 
 def test_same_streams_give_the_same_schedule() -> None:
     household = load_households()["household_d"]
-    first = [sample_schedule(household, TYPICAL_DURATIONS, day_streams(5, 3, "train", d)[0]) for d in range(20)]
-    again = [sample_schedule(household, TYPICAL_DURATIONS, day_streams(5, 3, "train", d)[0]) for d in range(20)]
+    first = [sample_schedule(household, TYPICAL_DURATIONS, DayKey(5, 3, "train", d).streams()[0]) for d in range(20)]
+    again = [sample_schedule(household, TYPICAL_DURATIONS, DayKey(5, 3, "train", d).streams()[0]) for d in range(20)]
     assert first == again
     assert len({json.dumps(s.to_json()) for s in first}) == 20
 
@@ -203,16 +205,16 @@ def test_day_ending_outside_is_drawn_again() -> None:
     always_late = _household(showering={6: 1.0}, leave_home={23: 1.0})
     durations = {"showering": (10.0, 10.0), "leave_home": (70.0, 80.0), "come_home": (5.0, 5.0)}
     with pytest.raises(DayEndedOutside, match="ended outside"):
-        sample_schedule(always_late, durations, day_streams(0, 0, "train", 0)[0])
+        sample_schedule(always_late, durations, DayKey(0, 0, "train", 0).streams()[0])
     with pytest.raises(DayEndedOutside, match="every one of 3 attempts"):
-        sample_day(always_late, durations, 0, 0, "train", 0, max_attempts=3)
+        sample_day(always_late, durations, DayKey(0, 0, "train", 0), max_attempts=3)
     sometimes_late = _household(showering={6: 1.0}, leave_home={23: 0.3})
     attempts = []
     for day in range(10):
-        schedule, attempt = sample_day(sometimes_late, durations, 0, 0, "train", day)
+        schedule, key = sample_day(sometimes_late, durations, DayKey(0, 0, "train", day))
         assert "leave_home" not in schedule.activities()
-        assert schedule == sample_schedule(sometimes_late, durations, day_streams(0, 0, "train", day, attempt)[0])
-        attempts.append(attempt)
+        assert schedule == sample_schedule(sometimes_late, durations, key.streams()[0])
+        attempts.append(key.attempt)
     assert max(attempts) > 0
 
 

@@ -13,14 +13,8 @@ from homer_sim.observe import SceneGraphObserver
 from homer_sim.world import World
 
 
-@pytest.fixture(scope="module")
-def world() -> World:
-    return World()
-
-
 @pytest.fixture
 def fresh(world: World) -> tuple[World, SceneGraphObserver]:
-    world.reset()
     world.settle(3.0)
     observer = SceneGraphObserver(world)
     observer.observe_all()

@@ -12,11 +12,6 @@ from homer_sim.observe import SceneGraphObserver
 from homer_sim.world import World
 
 
-@pytest.fixture(scope="module")
-def world() -> World:
-    return World()
-
-
 def test_inventory_matches_homer_vocabulary(world: World) -> None:
     graph = world.declared_graph()
     count = {c: graph.categories.count(c) for c in set(graph.categories)}
