@@ -27,10 +27,10 @@ from homer_sim.clock import DEFAULT_WINDOW_MIN
 from homer_sim.data.dataset import Dataset
 from homer_sim.data.generate import Generator, Sources
 from homer_sim.errors import HomerError, unknown_name
-from scenarios.env import AssistEnv, AssistTask, play
-from scenarios.episodes import dataset_day_plan
+from scenarios.episodes import dataset_day_plan, predictor_for
 from scenarios.policies import OraclePredictor, PsiPolicy
 from scenarios.scoring import day_result
+from scenarios.task import AssistEnv, AssistTask, play
 
 log = logging.getLogger(__name__)
 
@@ -60,17 +60,6 @@ class EvalSpec:
         return hashlib.sha1(json.dumps(asdict(self), sort_keys=True).encode()).hexdigest()[:10]
 
 
-def predictor_for(spec: EvalSpec, dataset: Dataset, household: str, progress: bool = False):
-    """The household's predictor fitted and tuned on its training days (cached under the checkpoint folder)."""
-    from model.evaluate import FitSpec, fit_tuned, household_split
-
-    fit, val, _, _ = household_split(dataset, household, None)
-    fit_spec = FitSpec(spec.method, tuple(fit), tuple(val))
-    predictor, _ = fit_tuned(fit_spec, dataset.meta, spec.window_min,
-                             fit_spec.path(spec.checkpoint_folder(), household), progress=progress)
-    return predictor
-
-
 class DayRunner:
     """One worker's simulators: the assisted-day environment and the unassisted replay it is judged against."""
 
@@ -88,7 +77,7 @@ class DayRunner:
                                 robot_seed=self.spec.seed)
         if self.env is None:
             self.env = AssistEnv(AssistTask([plan], window_min=self.spec.window_min,
-                                            reference=self.generator.executor))
+                                            reference=self.generator))
         self.env.task.days = (plan,)
         timestep = self.env.reset()
         task = self.env.task
@@ -105,7 +94,8 @@ class DayRunner:
         if self.spec.method == ORACLE:
             return OraclePredictor(task.reference, task.scene.movable)
         if household not in self.predictors:
-            self.predictors[household] = predictor_for(self.spec, self.dataset, household)
+            self.predictors[household] = predictor_for(self.dataset, household, self.spec.method,
+                                                      self.spec.window_min, self.spec.checkpoint_folder())
         return self.predictors[household]
 
 
@@ -153,7 +143,7 @@ def assist_eval(spec: EvalSpec, households: Sequence[str] | None = None, days: i
 
         check_method(spec.method)
         for name in names:  # fit once here, not in every worker
-            predictor_for(spec, dataset, name, progress=progress)
+            predictor_for(dataset, name, spec.method, spec.window_min, spec.checkpoint_folder(), progress)
     out = Path(out) if out else spec.checkpoint_folder() / f"assist_eval_{spec.method}_{spec.key()}"
     cached = _cached_days(out, spec)
     tasks = [(name, i) for name in names for i in range(_test_days(dataset, name, days))]

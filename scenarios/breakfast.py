@@ -18,9 +18,9 @@ from homer_sim.clock import clock_text
 from homer_sim.person.executor import DayLog
 from scenarios.assist import AssistLog
 from scenarios.breakfast_data import DataSpec, check_meta, ensure_dataset, ensure_predictor, make_generator
-from scenarios.env import AssistEnv, AssistTask, DayPlan, run_episode
 from scenarios.policies import PsiPolicy
 from scenarios.scoring import day_result
+from scenarios.task import AssistEnv, AssistTask, DayPlan, run_episode
 
 log = logging.getLogger(__name__)
 
@@ -85,7 +85,7 @@ def morning_setup(morning: Morning = Morning(), spec: DataSpec | None = None, re
     stages["predictor (cached)" if trained_s == 0 else "predictor (trained)"] = (
         time.perf_counter() - started - sum(stages.values()))
     env = AssistEnv(AssistTask([morning_plan(dataset, morning, spec)], seed=spec.seed,
-                               window_min=spec.window_min, reference=generator.executor, recording=recording))
+                               window_min=spec.window_min, reference=generator, recording=recording))
     return MorningSetup(env, predictor, dataset.meta.nodes, {k: round(v, 2) for k, v in stages.items()})
 
 

@@ -21,8 +21,8 @@ from homer_sim.home.layout import Layout
 from homer_sim.person.executor import DayLog
 from model.predictor import Rollout
 from scenarios.causes import CAUSES
-from scenarios.env import NO_RELOCATION, SceneInfo
 from scenarios.psi import Holds, Plan, Relocation, psi, unused_help
+from scenarios.task import NO_RELOCATION, SceneInfo
 
 log = logging.getLogger(__name__)
 

@@ -118,9 +118,9 @@ def cmd_render(args: argparse.Namespace) -> int:
         raise HomerError("rendering needs an offscreen GL context: run with MUJOCO_GL=egl (or MUJOCO_GL=osmesa)")
     from matplotlib.image import imsave
 
-    from scenarios.env import run_episode
     from scenarios.episodes import make_setup
     from scenarios.policies import EmptyPolicy, PsiPolicy
+    from scenarios.task import run_episode
 
     setup = make_setup(args.name, **({} if args.until is None else {"end_min": args.until}))
     env = setup.env
