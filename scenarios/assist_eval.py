@@ -84,7 +84,7 @@ class DayRunner:
         policy = PsiPolicy(task.scene, self.predictor(household, task), self.spec.window_min)
         episode_return = play(self.env, timestep, policy)
         result = day_result(task.log, task.reference, task.scene.nodes, task.scene.categories, policy.plans,
-                            self.spec.window_min)
+                            self.spec.window_min, until=task.day.end_min)
         result.update({"household": household, "day": index, "return": episode_return,
                        "wall_s": round(time.perf_counter() - started, 2)})
         return result

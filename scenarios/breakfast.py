@@ -112,7 +112,8 @@ def assisted_run(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec 
         recording.close()
         stages["recording"] = round(time.perf_counter() - started, 2)
     assist, reference = env.task.log, env.task.reference
-    result = day_result(assist, reference, env.scene.nodes, env.scene.categories, policy.plans, spec.window_min)
+    result = day_result(assist, reference, env.scene.nodes, env.scene.categories, policy.plans, spec.window_min,
+                        until=morning.end_min)
     result.update({"rrd": str(rrd) if rrd is not None else None, "household": spec.household,
                    "day": f"{morning.split}/{morning.index}", "schedule": [list(e) for e in env.task.day.entries],
                    "method": spec.method, "threshold": policy.threshold, "window_min": spec.window_min,

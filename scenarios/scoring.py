@@ -43,9 +43,11 @@ def is_correct(outcome: RelocationOutcome, reference: DayLog, index: Mapping[str
         r.destination]
 
 
-def person_fetches(reference: DayLog, rooms: set[str]) -> list[tuple[float, str, str]]:
-    """(routine minute, object, furniture) of each move of the person's onto or into furniture in `reference`."""
-    return [(minute, obj, to) for minute, obj, _, to, _ in reference.moves if to and to not in rooms]
+def person_fetches(reference: DayLog, rooms: set[str], until: float | None = None) -> list[tuple[float, str, str]]:
+    """(routine minute, object, furniture) of each move of the person's onto or into furniture in `reference`, up
+    to routine minute `until` (None: all)."""
+    return [(minute, obj, to) for minute, obj, _, to, _ in reference.moves
+            if to and to not in rooms and (until is None or minute <= until)]
 
 
 def made_ahead(fetch: tuple[float, str, str], relocations: Sequence[RelocationOutcome], window_min: int) -> bool:
@@ -58,8 +60,8 @@ def made_ahead(fetch: tuple[float, str, str], relocations: Sequence[RelocationOu
 class Fetches:
     """The reference's fetches, credited once each as the run passes them (the reward's positive part)."""
 
-    def __init__(self, reference: DayLog, rooms: set[str], window_min: int) -> None:
-        self.pending = person_fetches(reference, rooms)
+    def __init__(self, reference: DayLog, rooms: set[str], window_min: int, until: float | None = None) -> None:
+        self.pending = person_fetches(reference, rooms, until)
         self.window_min = window_min
         self.credited = 0
 
@@ -72,9 +74,11 @@ class Fetches:
         return helped
 
 
-def fetches(assist: AssistLog, reference: DayLog, rooms: set[str], window_min: int) -> dict:
-    """The person's fetches (in the reference day) and how many of them the robot had already done."""
-    moves = person_fetches(reference, rooms)
+def fetches(assist: AssistLog, reference: DayLog, rooms: set[str], window_min: int,
+            until: float | None = None) -> dict:
+    """The person's fetches (in the reference day, up to routine minute `until`) and how many of them the robot
+    had already done."""
+    moves = person_fetches(reference, rooms, until)
     helped = sum(made_ahead(m, assist.relocations, window_min) for m in moves)
     return {"fetches": len(moves), "fetches_done_by_robot": helped,
             "fetch_share": round(helped / len(moves), 3) if moves else None}
@@ -106,11 +110,14 @@ def score(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...], window_s
 
 
 def end_state(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...]) -> dict:
-    """Where the objects the robot moved are at the end of the run, against where the person alone left them (the
-    reference's last snapshot): tidy-up is judged here, since the paper's metrics count only the person's moves."""
+    """Where the objects the robot moved are at the end of the run, against where the person alone had left them
+    then (the reference's snapshot at the run's last minute, else its last): tidy-up is judged here, since the
+    paper's metrics count only the person's moves."""
     index = {n: i for i, n in enumerate(nodes)}
     moved = sorted({o.relocation.obj for o in assist.relocations if o.done})
-    final, alone = assist.day.parents[-1], reference.parents[-1]
+    last = assist.day.minutes[-1] if assist.day.minutes else None
+    then = reference.minutes.index(last) if last in reference.minutes else -1
+    final, alone = assist.day.parents[-1], reference.parents[then]
     elsewhere = {obj: {"assisted": nodes[final[index[obj]]], "unassisted": nodes[alone[index[obj]]]}
                  for obj in moved if final[index[obj]] != alone[index[obj]]}
     return {"robot_moved": len(moved), "robot_moved_left_as_unassisted": len(moved) - len(elsewhere),
@@ -118,13 +125,15 @@ def end_state(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...]) -> d
 
 
 def day_result(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...], categories: tuple[str, ...],
-               plans: Sequence[tuple[int, Plan]], window_min: int, grid_min: int = GRID_MIN) -> dict:
+               plans: Sequence[tuple[int, Plan]], window_min: int, grid_min: int = GRID_MIN,
+               until: float | None = None) -> dict:
     """Everything measured on one assisted run (JSON-ready): `score`, `fetches` and `end_state`, the robot's
     minutes and skill calls, collateral (objects displaced that no relocation named), failures by cause, the
-    person's observed moves and why they stopped early, if they did."""
+    person's observed moves and why they stopped early, if they did; `until`: the routine minute the run was cut
+    at (None: the whole day)."""
     result = score(assist, reference, nodes, window_min // grid_min, plans)
     rooms = {n for n, c in zip(nodes, categories, strict=True) if c == "room"}
-    result.update(fetches(assist, reference, rooms, window_min))
+    result.update(fetches(assist, reference, rooms, window_min, until))
     result.update(end_state(assist, reference, nodes))
     causes = Counter(row["cause"] for row in result["relocations"] if not row["done"])
     result.update({"robot_minutes": round(assist.robot_minutes, 2), "error": assist.error,

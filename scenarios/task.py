@@ -1,9 +1,10 @@
 """The assisted day as a task and a `dm_env.Environment`: one episode per day, one step per 10-minute snapshot.
 
 The lifecycle follows dm_control's `control.Task` and composer: `AssistTask.initialize_episode` replays the day
-without the robot (the reference the reward is judged against) and starts the person's day up to its first
-snapshot; at each step `before_step` has the robot carry out the relocations the action asks for and
-`after_step` lets the person live on to the next snapshot; then `get_observation`, `get_reward` and
+without the robot (the reference the reward is judged against, lived on a window past the episode's end so the
+last relocations are judged too) and starts the person's day up to its first snapshot; at each step
+`before_step` has the robot carry out the relocations the action asks for and `after_step` lets the person
+live on to the next snapshot; then `get_observation`, `get_reward` and
 `should_terminate_episode`. `AssistEnv` drives a task as dm_env expects (`reset`, `step`, specs).
 
 Observation (what a robot could perceive; never the person's schedule or intentions): the observed scene graph
@@ -125,9 +126,10 @@ class AssistTask:
             self.helper = Helper(self.world, self.executor, rng, self.recording)
         self.episodes += 1
         self.day = day
-        self.reference = self.generator.replay(day.household, day.key, list(day.entries), end_min=day.end_min)
+        past_end = None if day.end_min is None else day.end_min + self.window_min  # truth for the last window
+        self.reference = self.generator.replay(day.household, day.key, list(day.entries), end_min=past_end)
         self.log = self.helper.log
-        self.fetches = Fetches(self.reference, set(self.scene.layout.room_names()), self.window_min)
+        self.fetches = Fetches(self.reference, set(self.scene.layout.room_names()), self.window_min, day.end_min)
         self.busy_until, self.free_at, self.reward = 0.0, -np.inf, 0.0
         self.outcomes: list[RelocationOutcome] = []
         scripts = self.generator.scripts_for(day.household)  # the stream of Generator.replay, stepped here

@@ -9,6 +9,8 @@ from pathlib import Path
 import pytest
 
 from homer_sim.data.generate import generate
+from scenarios.assist_eval import markdown_table, summarise
+from scenarios.causes import CAUSES, OTHER, cause_of
 from scenarios.cli.main import main
 from scenarios.env import run_episode
 from scenarios.episodes import make_setup
@@ -50,7 +52,8 @@ def test_the_oracle_day_adds_up_and_beats_an_empty_plan(data: Path, tmp_path: Pa
     setup = make_setup("dataset_day", data=str(data), household="household_a", end_min=UNTIL)
     assert run_episode(setup.env, EmptyPolicy(setup.env.scene)) == 0.0
     task = setup.env.task
-    empty = day_result(task.log, task.reference, task.scene.nodes, task.scene.categories, (), 30)
+    empty = day_result(task.log, task.reference, task.scene.nodes, task.scene.categories, (), 30,
+                       until=UNTIL)
     assert empty["fetches"] == total["fetches"] and empty["fetches_done_by_robot"] == 0
     day = json.loads((out / "days" / "household_a_000.json").read_text())
     assert day["return"] == total["fetches_done_by_robot"] - total["relocations_wrong"] > 0
@@ -60,3 +63,35 @@ def test_unknown_households_are_named_with_the_known_ones(data: Path, capsys: py
     assert main(["assist-eval", "--data", str(data), "--households", "household_z", "--method", "oracle",
                  "--quiet"]) == 2
     assert "household_a" in capsys.readouterr().err
+
+
+def test_failure_reasons_are_grouped_by_cause() -> None:
+    reasons = {
+        "place: clothes_dress fell out of the hand while carried": "fell out of the hand",
+        "water_bottle: it has fallen over (lies on its side), and no grasp fits it so": "lies fallen over",
+        "place: water_bottle ended ON table_home_office, not on bookshelf_home_office": "ended elsewhere",
+        "place: no free base pose puts drinking_glass into dishwasher without it or the arm": "no free base pose",
+        "cupboard did not open (open cupboard/left: openness 0.42, below 0.9)": "container did not open",
+        "place: fork fell over on sink_dining_room": "fell over on the destination",
+        "something new": OTHER,
+    }
+    assert {reason: cause_of(reason) for reason in reasons} == reasons
+    assert set(reasons.values()) <= set(CAUSES)
+
+
+def test_totals_add_days_up_and_take_the_median_wall_time() -> None:
+    def day(household: str, planned: int, done: int, correct: int, fetches: int, helped: int, wall: float) -> dict:
+        return {"household": household, "relocations_planned": planned, "relocations_done": done,
+                "relocations_correct": correct, "relocations_wrong": done - correct, "fetches": fetches,
+                "fetches_done_by_robot": helped, "collateral": 1, "robot_minutes": 2.0, "wall_s": wall,
+                "error": "", "failures": {"no path": planned - done}}
+
+    days = [day("a", 4, 3, 2, 10, 2, 30.0), day("a", 2, 2, 2, 10, 1, 50.0), day("b", 1, 0, 0, 5, 0, 10.0)]
+    summary = summarise("markov", days, ["a", "b"])
+    assert summary["per_household"]["a"] == {
+        "relocations_planned": 6, "relocations_done": 5, "relocations_correct": 4, "relocations_wrong": 1,
+        "fetches": 20, "fetches_done_by_robot": 3, "collateral": 2, "fetch_share": 0.15, "days": 2,
+        "robot_minutes": 4.0, "wall_s_per_day": 40.0, "person_stopped": 0}
+    assert summary["total"]["fetch_share"] == 0.12 and summary["total"]["wall_s_per_day"] == 30.0
+    assert summary["failures"] == {"no path": 2}
+    assert "| a | 2 | 6 | 5 | 4 | 1 |" in markdown_table(summary)

@@ -43,7 +43,8 @@ def _episode(env: AssistEnv, policy) -> tuple[list[dm_env.TimeStep], float]:
 def _result(setup: Setup, policy) -> dict:
     task = setup.env.task
     plans = getattr(policy, "plans", ())
-    return day_result(task.log, task.reference, task.scene.nodes, task.scene.categories, plans, 30)
+    return day_result(task.log, task.reference, task.scene.nodes, task.scene.categories, plans, 30,
+                      until=END_MIN)
 
 
 def test_an_episode_is_one_day_with_specs_matched_at_every_timestep(setup: Setup) -> None:
