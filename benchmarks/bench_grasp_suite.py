@@ -18,7 +18,7 @@ REPO_ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO_ROOT))
 
 from benchmarks._common import emit, machine_info, pin_to_one_core, positive_int, setup_logging
-from planners.grasp_suite import TARGET_CLASS, TARGET_OVERALL, run_suite
+from planners.suites.grasp_suite import TARGET_CLASS, TARGET_OVERALL, run_suite
 
 log = logging.getLogger("benchmarks.grasp_suite")
 

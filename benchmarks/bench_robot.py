@@ -25,7 +25,7 @@ import numpy as np
 
 from benchmarks._common import emit, machine_info, pin_to_one_core, positive_int, setup_logging, summary
 from homer_sim.world import World
-from planners.ik import IKSolver
+from planners.motion.ik import IKSolver
 from planners.robot import add_robot
 from planners.skills import Robot
 

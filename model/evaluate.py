@@ -25,7 +25,7 @@ from tqdm import tqdm
 from homer_sim.clock import DEFAULT_WINDOW_MIN
 from homer_sim.data.dataset import Dataset, DatasetMeta, Day
 from model.methods import check_method, load_predictor, make_predictor, save_predictor
-from model.metrics import Counts, Queries, day_queries, gate, score, window_steps
+from model.metrics import F1_STEPS, Counts, Queries, day_queries, gate, relocation_counts, score, window_steps
 from model.predictor import ModelError, Predictor, Rollout
 
 log = logging.getLogger(__name__)
@@ -33,7 +33,8 @@ VAL_FRACTION = 0.1
 HEADLINE_WINDOW_MIN = DEFAULT_WINDOW_MIN
 CURVE_WINDOWS_MIN = tuple(range(10, 130, 10))
 MAX_UNUSED_WRONG_PCT = 1.0  # tuning keeps at least 99% of unused objects in place when any setting can
-TUNING_VERSION = 2  # bump when the tuning rule or a grid changes: cached tunings are then redone
+TUNING_VERSION = 3  # bump when the tuning rule or a grid changes: cached tunings are then redone
+TARGETS = ("paper", "f1")  # what tunables are chosen for: the paper's objective, or relocation F1
 QUERY_CHUNK = 128  # queries per rollout call, bounds memory of the dense (B, N, N) probabilities
 
 
@@ -52,12 +53,13 @@ def rollout_queries(predictor: Predictor, queries: Queries, steps: int) -> Rollo
     return Rollout(*(np.concatenate([getattr(p, f.name) for p in parts], axis=1) for f in fields(Rollout)))
 
 
-def tune(predictor: Predictor, queries: Queries, steps: int) -> tuple[dict[str, float], float]:
-    """Grid search of the predictor's tunables on validation queries; sets and returns the best (and its objective).
+def tune(predictor: Predictor, queries: Queries, steps: int, target: str = "paper") -> tuple[dict[str, float], float]:
+    """Grid search of the predictor's tunables on validation queries; sets and returns the best (and its score).
 
-    Best: the highest objective among settings that move at most MAX_UNUSED_WRONG_PCT of the unused objects, or
-    the highest objective overall if none does. The threshold only changes the decision rule applied to a rollout,
-    so one rollout per combination of the other tunables scores every threshold.
+    target "paper": the highest objective among settings that move at most MAX_UNUSED_WRONG_PCT of the unused
+    objects, or the highest objective overall if none does. target "f1": the highest mean relocation F1 over
+    steps 1 .. `steps`. The threshold only changes the decision rule applied to a rollout, so one rollout per
+    combination of the other tunables scores every threshold.
     """
     names = [k for k in predictor.grid if k != "threshold"]
     thresholds = predictor.grid.get("threshold", (predictor.params["threshold"],))
@@ -66,13 +68,22 @@ def tune(predictor: Predictor, queries: Queries, steps: int) -> tuple[dict[str, 
         predictor.set_params(**dict(zip(names, values, strict=True)))
         rollout = rollout_queries(predictor, queries, steps)
         for threshold in thresholds:
-            counts = score(queries, gate(rollout, queries.observed, threshold), steps, predictor.movable)
-            within = counts.unused_wrong <= MAX_UNUSED_WRONG_PCT / 100.0 * counts.unused
+            predicted = gate(rollout, queries.observed, threshold)
             params = {**dict(zip(names, values, strict=True)), "threshold": float(threshold)}
-            scored.append((within, counts.objective(), -len(scored), params))
+            scored.append((*_tuning_score(target, queries, predicted, steps, predictor.movable), -len(scored), params))
     within, objective, _, best = max(scored, key=lambda row: row[:3])  # earliest in grid order wins ties
     predictor.set_params(**best)
     return dict(predictor.params), objective
+
+
+def _tuning_score(target: str, queries: Queries, predicted: np.ndarray, steps: int, movable: np.ndarray
+                  ) -> tuple[bool, float]:
+    """(admissible, score) of one setting's predictions; higher is better."""
+    if target == "f1":
+        return True, float(relocation_counts(queries, predicted, movable, steps).f1().mean())
+    counts = score(queries, predicted, steps, movable)
+    return counts.unused_wrong <= MAX_UNUSED_WRONG_PCT / 100.0 * counts.unused, counts.objective()
+
 
 def days_fingerprint(days: Sequence[Day]) -> str:
     """A short digest of the days' parent arrays (the cache key of a fitted predictor)."""
@@ -102,16 +113,29 @@ class FitSpec:
         return folder / household / f"{self.method}_{len(self.fit_days)}+{len(self.val_days)}d_{self.key()}.pt"
 
 
-def fit_tuned(spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | None = None,
-              progress: bool = True) -> tuple[Predictor, dict]:
-    """Load the cached predictor at `path` or fit one; tune it at `window_min` unless the cache already was.
+def tuning_key(target: str, window_min: int) -> str:
+    """Name of a tuning in a checkpoint's info: "paper@30" (paper objective at 30 min) or "f1" (steps 1 .. 6)."""
+    if target not in TARGETS:
+        raise ModelError(f"unknown metric {target!r}; known: {', '.join(TARGETS)}")
+    return "f1" if target == "f1" else f"paper@{window_min}"
 
-    Returns the predictor and its provenance (days, training report, tuning window and validation objective).
+
+def fit_tuned(spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | None = None,
+              progress: bool = True, target: str = "paper") -> tuple[Predictor, dict]:
+    """Load the cached predictor at `path` or fit one; tune it for `target` unless the cache already was.
+
+    target "paper" tunes at `window_min`, "f1" for SLaTe-PRO's F1 over 10 .. 60 minutes (window_min unused).
+    Every tuning of one fit is kept in the checkpoint's info["tunings"]. Returns the predictor and its
+    provenance (days, training report, tunings and their validation scores).
     """
-    steps = window_steps(window_min, meta.grid_min)
+    key = tuning_key(target, window_min)
+    steps = F1_STEPS if target == "f1" else window_steps(window_min, meta.grid_min)
+    tunings: dict = {}
     if path is not None and path.is_file():
         predictor, info = load_predictor(path, meta, progress=progress)
-        if info.get("tuned_window_min") == window_min and info.get("tuning_version") == TUNING_VERSION:
+        tunings = info.get("tunings", {}) if info.get("tuning_version") == TUNING_VERSION else {}
+        if key in tunings:
+            predictor.set_params(**tunings[key]["params"])
             return predictor, info
     else:
         predictor = make_predictor(spec.method, meta, progress=progress, **dict(spec.config))
@@ -122,10 +146,10 @@ def fit_tuned(spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | No
         report = getattr(predictor, "report", None)
         if report is not None:
             info.update(epochs=report.epochs, best_epoch=report.best_epoch, train_s=round(report.wall_s, 2))
-    params, val_score = tune(predictor, day_queries(spec.val_days, steps), steps)
-    log.info("%s tuned at %d min: %s (validation objective %.2f)", spec.method, window_min, params, val_score)
-    info = {**info, "tuned_window_min": window_min, "tuning_version": TUNING_VERSION,
-            "val_objective": round(val_score, 4)}
+    params, val_score = tune(predictor, day_queries(spec.val_days, steps), steps, target)
+    log.info("%s tuned for %s: %s (validation score %.4f)", spec.method, key, params, val_score)
+    tunings = {**tunings, key: {"params": params, "val_score": round(val_score, 4)}}
+    info = {**info, "tuning_version": TUNING_VERSION, "tunings": tunings}
     if path is not None:
         save_predictor(path, predictor, info)
     return predictor, info
@@ -148,8 +172,16 @@ def score_windows(predictor: Predictor, queries: Queries, windows_min: Sequence[
 
 def evaluate(data: str | Path, methods: Sequence[str], window_min: int = HEADLINE_WINDOW_MIN,
              checkpoints: str | Path | None = None, households: Sequence[str] | None = None,
-             train_days: int | None = None, progress: bool = True) -> dict:
-    """The `homer evaluate` result: per method, percentages averaged over households (see DESIGN.md)."""
+             train_days: int | None = None, progress: bool = True, metric: str = "paper") -> dict:
+    """The `homer evaluate` result: per method, scores averaged over households (see DESIGN.md).
+
+    metric "paper" (the paper's table at `window_min`), "f1" (SLaTe-PRO's relocation F1, 10 .. 60 minutes) or
+    "both"; each is scored with the tunables chosen on validation days for that metric. Keys: "methods"[name] (means
+    over households; "f1" as in summarise_f1) and "per_household"[household][name].
+    """
+    if metric not in (*TARGETS, "both"):
+        raise ModelError(f"unknown metric {metric!r}; known: {', '.join(TARGETS)}, both")
+    targets = TARGETS if metric == "both" else (metric,)
     dataset = Dataset(data)
     methods = [check_method(m) for m in methods]
     folder = Path(checkpoints) if checkpoints is not None else dataset.root / "checkpoints"
@@ -158,17 +190,39 @@ def evaluate(data: str | Path, methods: Sequence[str], window_min: int = HEADLIN
     bar = tqdm(total=len(names) * len(methods), desc="evaluate", unit="fit", disable=not progress)
     for house in names:
         fit, val, test, pool = household_split(dataset, house, train_days)
-        queries = day_queries(test, window_steps(window_min, dataset.meta.grid_min))
         for method in methods:
             bar.set_postfix(household=house, method=method)
             spec = FitSpec(method, tuple(fit), tuple(val))
-            predictor, _ = fit_tuned(spec, dataset.meta, window_min, spec.path(folder, house), progress)
-            counts, pooled = score_windows(predictor, queries, [window_min], dataset.meta.grid_min, pool)[window_min]
-            per_house[method][house] = household_result(counts, pooled, predictor.params)
+            per_house[method][house] = household_scores(spec, dataset.meta, (test, pool), window_min,
+                                                        spec.path(folder, house), targets, progress)
             bar.update()
     bar.close()
-    return {"window_min": window_min, "households": names, "train_days": train_days,
-            "methods": {m: summarise(per_house[m]) for m in methods}}
+    return {"window_min": window_min, "households": names, "train_days": train_days, "metric": metric,
+            "methods": {m: summarise(per_house[m]) for m in methods},
+            "per_household": {h: {m: per_house[m][h] for m in methods} for h in names}}
+
+
+def household_scores(spec: FitSpec, meta: DatasetMeta, test: tuple[list[Day], np.ndarray], window_min: int,
+                     path: Path | None, targets: Sequence[str], progress: bool = True) -> dict:
+    """One method on one household's test days (and its used-object pool), for each target metric."""
+    days, pool = test
+    out: dict = {}
+    for target in targets:
+        predictor, _ = fit_tuned(spec, meta, window_min, path, progress, target)
+        if target == "f1":
+            out["f1"] = f1_result(predictor, days)
+            continue
+        queries = day_queries(days, window_steps(window_min, meta.grid_min))
+        counts, pooled = score_windows(predictor, queries, [window_min], meta.grid_min, pool)[window_min]
+        out.update(household_result(counts, pooled, predictor.params))
+    return out
+
+
+def f1_result(predictor: Predictor, days: Sequence[Day]) -> dict:
+    """SLaTe-PRO's relocation F1 of a tuned predictor on `days` (RelocationCounts.summary, plus its params)."""
+    queries = day_queries(days, F1_STEPS)
+    predicted = gate(rollout_queries(predictor, queries, F1_STEPS), queries.observed, predictor.params["threshold"])
+    return {**relocation_counts(queries, predicted, predictor.movable).summary(), "params": dict(predictor.params)}
 
 
 def household_split(dataset: Dataset, house: str, train_days: int | None
@@ -195,14 +249,27 @@ def household_result(counts: Counts, pooled: Counts, params: dict[str, float]) -
 
 
 def summarise(per_house: dict[str, dict]) -> dict:
-    """Mean and spread (population standard deviation) over households of each percentage."""
+    """Mean and spread (population standard deviation) over households of each percentage, and of the F1s."""
     out: dict = {"per_household": per_house}
+    first = next(iter(per_house.values()))
     for group in ("used", "unused", "unused_used_pool"):
-        keys = next(iter(per_house.values()))[group].keys()
-        values = {k: np.array([h[group][k] for h in per_house.values()], dtype=float) for k in keys}
+        if group not in first:
+            continue
+        values = {k: np.array([h[group][k] for h in per_house.values()], dtype=float) for k in first[group]}
         out[group] = {k: _finite(np.nanmean(v)) for k, v in values.items()}
         out.setdefault("spread", {})[group] = {k: _finite(np.nanstd(v)) for k, v in values.items()}
+    if "f1" in first:
+        out["f1"] = summarise_f1([h["f1"] for h in per_house.values()])
     return out
+
+
+def summarise_f1(rows: Sequence[dict]) -> dict:
+    """Households' F1 results -> per_step and mean averaged over households (as the paper table is), tp, fp, fn
+    summed, and "spread" (population standard deviation over households of the mean)."""
+    means = np.array([r["mean"] for r in rows], dtype=float)
+    return {"per_step": [round(float(v), 4) for v in np.mean([r["per_step"] for r in rows], axis=0)],
+            "mean": round(float(means.mean()), 4), "spread": round(float(means.std()), 4),
+            **{k: int(sum(r[k] for r in rows)) for k in ("tp", "fp", "fn")}}
 
 
 def _finite(value: float) -> float | None:

@@ -15,6 +15,7 @@ import torch
 
 from homer_sim.data.dataset import DatasetMeta
 from homer_sim.errors import unknown_name
+from model.analogs import Analogs
 from model.baselines import FreMEn, FreMEnPrior, LastSeen, StaticSemantic
 from model.gnn import GNNConfig
 from model.markov import TimedMarkov
@@ -26,7 +27,7 @@ CHECKPOINT_FORMAT = 1
 GNN_VARIANTS = {"gnn": {}, "gnn_no_attention": {"attention": False}, "gnn_linear_time": {"time_encoding": "linear"}}
 BASELINES: dict[str, Callable[[DatasetMeta], Predictor]] = {
     "fremen": FreMEn, "fremen_prior": FreMEnPrior, "static_semantic": StaticSemantic, "last_seen": LastSeen,
-    "markov": TimedMarkov,
+    "markov": TimedMarkov, "analogs": Analogs,
 }
 assert METHODS == (*GNN_VARIANTS, *BASELINES)
 __all__ = ["DEFAULT_METHODS", "METHODS", "check_method", "load_predictor", "make_predictor", "save_predictor"]
@@ -76,8 +77,10 @@ def load_predictor(path: str | Path, meta: DatasetMeta | None = None, progress: 
         blob = torch.load(Path(path), map_location="cpu", weights_only=True)
     except FileNotFoundError:
         raise ModelError(f"{path}: no such checkpoint") from None
-    except (RuntimeError, OSError, EOFError) as error:
-        raise ModelError(f"{path}: not a readable checkpoint ({error})") from None
+    except Exception as error:  # noqa: BLE001 (torch raises UnpicklingError, RuntimeError, EOFError, ... alike)
+        reason = (str(error).strip().splitlines() or [""])[0][:200]
+        raise ModelError(f"{path}: not a readable checkpoint, corrupted or holding code that weights-only loading "
+                         f"refuses to run ({type(error).__name__}: {reason})") from None
     if not isinstance(blob, dict) or blob.get("format") != CHECKPOINT_FORMAT:
         raise ModelError(f"{path}: checkpoint format {blob.get('format') if isinstance(blob, dict) else None!r}; "
                          f"this homer-sim reads {CHECKPOINT_FORMAT}")

@@ -7,6 +7,12 @@ change counts, for truth and prediction alike, compared with the parent observed
 move to another destination) or *missed* (no predicted move). Unused objects are *correct* (no predicted move)
 or *wrong* (a predicted move). Near the end of a day the window is cut at the day's last step, for truth and
 prediction alike; the last step of a day is no query. Percentages are per household.
+
+SLaTe-PRO's relocation F1 (the metric published on HOMER+): for each query t, lookahead step s = 1 .. 6 (10 .. 60
+minutes) that lies inside the day, and movable object o, with ref = o's parent at t, pred = the predicted parent at
+t + s and gt = the true parent at t + s: a true positive if pred == gt != ref; a false positive if pred != gt and
+pred != ref; a false negative if pred != gt and gt != ref (a wrong predicted move is both). Counts are pooled over
+all queries of a household, per step; F1 = 2 TP / (2 TP + FP + FN), 0 when nothing moved or was predicted to.
 """
 
 from __future__ import annotations
@@ -141,6 +147,51 @@ def score(queries: Queries, predicted: np.ndarray, window_steps: int, movable: n
     right = pred_moved & (pred_dest == true_dest)
     return Counts(int((used & right).sum()), int((used & pred_moved & ~right).sum()), int((used & ~pred_moved).sum()),
                   int((unused & ~pred_moved).sum()), int((unused & pred_moved).sum()))
+
+
+F1_STEPS = 6  # SLaTe-PRO's lookahead steps, 10 .. 60 minutes
+
+
+@dataclass(frozen=True)
+class RelocationCounts:
+    """SLaTe-PRO's pooled counts per lookahead step: tp, fp, fn Shape (S,) int."""
+
+    tp: np.ndarray
+    fp: np.ndarray
+    fn: np.ndarray
+
+    def __add__(self, other: RelocationCounts) -> RelocationCounts:
+        return RelocationCounts(self.tp + other.tp, self.fp + other.fp, self.fn + other.fn)
+
+    def f1(self) -> np.ndarray:
+        """Shape (S,) float: F1 per step, 0 where a step has no true and no predicted relocation."""
+        denominator = 2 * self.tp + self.fp + self.fn
+        return np.where(denominator > 0, 2 * self.tp / np.maximum(denominator, 1), 0.0)
+
+    def summary(self) -> dict:
+        """{"per_step": F1 per step, "mean": their mean, "tp", "fp", "fn": summed over steps} (plain numbers)."""
+        f1 = self.f1()
+        return {"per_step": [round(float(v), 4) for v in f1], "mean": round(float(f1.mean()), 4),
+                "tp": int(self.tp.sum()), "fp": int(self.fp.sum()), "fn": int(self.fn.sum())}
+
+
+def relocation_counts(queries: Queries, predicted: np.ndarray, movable: np.ndarray,
+                      steps: int = F1_STEPS) -> RelocationCounts:
+    """SLaTe-PRO's TP/FP/FN of predicted parents (Q, K', N), K' >= steps, pooled per lookahead step.
+
+    Steps past a day's last grid step (queries.valid) do not count. movable: (N,) bool, the objects scored.
+    """
+    if steps < 1 or steps > min(predicted.shape[1], queries.future.shape[1]):
+        raise ModelError(f"{steps} lookahead steps; predictions and truth cover 1..{predicted.shape[1]}")
+    ref = queries.observed[:, None, :]
+    gt, pred = queries.future[:, :steps], np.asarray(predicted)[:, :steps]
+    counted = (np.arange(steps)[None, :] < queries.valid[:, None])[:, :, None] & np.asarray(movable, bool)[None, None]
+    wrong = pred != gt
+
+    def pooled(mask: np.ndarray) -> np.ndarray:
+        return (mask & counted).sum(axis=(0, 2)).astype(np.int64)
+
+    return RelocationCounts(pooled(~wrong & (gt != ref)), pooled(wrong & (pred != ref)), pooled(wrong & (gt != ref)))
 
 
 def window_steps(window_min: int, grid_min: int) -> int:

@@ -1,6 +1,7 @@
 """The robot's MJCF names and `add_robot`, which puts the robot into an apartment spec before it is compiled.
 
-Every MJCF name the planners use lives here. The robot file (`assets/robot/robot.xml`) has its base joints at
+Every MJCF name the planners use lives here, and `spec_mismatches`: where the robot file disagrees with the
+`homer_sim.robot_spec.RobotSpec` the planners take. The robot file (`assets/robot/robot.xml`) has its base joints at
 the world origin; `add_robot` places the base at a start pose so that the base joints read world coordinates:
 qpos of `base_x`, `base_y` is the base centre in m and `base_yaw` its heading in rad, both in the robot-only
 model and in the apartment.
@@ -14,6 +15,9 @@ from functools import partial
 from pathlib import Path
 
 import mujoco
+import numpy as np
+
+from homer_sim.robot_spec import ROBOT, RobotSpec
 
 ROBOT_XML = Path(__file__).resolve().parent.parent / "assets" / "robot" / "robot.xml"
 PREFIX = "robot/"
@@ -29,8 +33,7 @@ PAD_GEOMS = ("finger_left_pad", "finger_right_pad")
 BASE_GEOMS = ("base_shell", "torso_sleeve", "torso_column")
 ARM_GEOMS = ("upperarm_col", "elbow_col", "forearm_col", "wrist_flex_col", "palm", "finger_left_link",
              "finger_right_link", "finger_left_pad", "finger_right_pad")
-BASE_RADIUS = 0.28  # m
-GRIPPER_MAX = 0.08  # m per finger (0.16 m stroke)
+FINGER_GEOMS = ("finger_left_link", "finger_right_link", "finger_left_pad", "finger_right_pad")  # of ARM_GEOMS
 HOME_KEY = "home"
 DEFAULT_POSE = (3.0, 1.3, 0.0)  # (x m, y m, yaw rad): dining room, facing east into free floor
 
@@ -62,6 +65,31 @@ def add_robot(spec: mujoco.MjSpec, pose: tuple[float, float, float] = DEFAULT_PO
         actuator.biasprm[0] = actuator.gainprm[0] * ref
     frame = spec.worldbody.add_frame()
     frame.attach_body(base, prefix, "")
+
+
+def spec_mismatches(model: mujoco.MjModel, robot: RobotSpec = ROBOT, prefix: str = "") -> list[str]:
+    """Where compiled `model` (the robot alone, or an apartment with the robot under `prefix`) disagrees with
+    `robot`: each a message naming the value in the model and in the spec; empty where they agree (to 1e-9 m, N
+    or of a coefficient)."""
+    geom, joint = (lambda n: model.geom(prefix + n)), (lambda n: model.joint(prefix + n))
+    palm, grip = geom("palm"), model.site(prefix + GRIP_SITE)
+    found = {
+        "base_radius": geom("base_shell").size[0],
+        "torso_travel": joint(TORSO_JOINT).range[1],
+        "finger_stroke": min(joint(n).range[1] for n in FINGER_JOINTS),
+        "pad_half_length": geom(PAD_GEOMS[0]).size[0],
+        "pad_friction": geom(PAD_GEOMS[0]).friction[0],
+        "finger_half_thickness": geom(FINGER_GEOMS[0]).size[2],
+        "palm_half_size": tuple(palm.size),
+        "palm_setback": grip.pos[0] - (palm.pos[0] + palm.size[0]),
+        "grip_force": model.actuator(prefix + "gripper").forcerange[1] / len(FINGER_JOINTS),
+    }
+    wrong = [f"{name}: the model has {np.round(value, 6).tolist()}, the spec {getattr(robot, name)}"
+             for name, value in found.items() if not np.allclose(value, getattr(robot, name), rtol=0.0, atol=1e-9)]
+    speeds = sorted(name for name, _ in robot.joint_speeds)
+    if speeds != sorted(BODY_JOINTS):
+        wrong.append(f"joint_speeds: the spec limits {speeds}, the model's body joints are {sorted(BODY_JOINTS)}")
+    return wrong
 
 
 def robot_at(pose: tuple[float, float, float], prefix: str = PREFIX) -> Callable[[mujoco.MjSpec], None]:

@@ -19,8 +19,8 @@ import numpy as np
 from homer_sim.graph import ON, SceneGraph
 from homer_sim.person.executor import DayLog, Executor
 from homer_sim.world import World
-from planners.control import FREE_MOTION
-from planners.navigation import NavigationError
+from planners.motion.control import FREE_MOTION
+from planners.motion.navigation import NavigationError
 from planners.robot import DEFAULT_POSE
 from planners.skills import Robot, SkillResult
 from scenarios.psi import PlanStep, Relocation, plan_steps

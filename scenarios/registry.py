@@ -47,13 +47,13 @@ def _full_day(household: str) -> Callable[[Path | None], dict]:
 
 
 def _grasp_suite(rrd: Path | None) -> dict:
-    from planners.grasp_suite import run_suite
+    from planners.suites.grasp_suite import run_suite
 
     return run_suite(quick=True, progress=True, rrd=rrd)
 
 
 def _grasp_summary(result: dict) -> list[str]:
-    from planners.grasp_suite import format_table
+    from planners.suites.grasp_suite import format_table
 
     return [format_table(result)]
 

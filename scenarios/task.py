@@ -36,7 +36,7 @@ from homer_sim.home.layout import Layout
 from homer_sim.person.avatar import add_avatar
 from homer_sim.person.executor import DayLog, DayRun, Executor
 from homer_sim.recording import RecordedWorld
-from planners.grasps import ungraspable_reason
+from planners.grasps.candidate import ungraspable_reason
 from planners.robot import add_robot
 from scenarios.assist import Helper, RelocationOutcome, containers_of
 from scenarios.causes import CAUSES, cause_of

@@ -1,8 +1,8 @@
 """The layout validator: consistency of names and places, and the robot's envelope designed in.
 
-Every error is a LayoutError naming the node. The robot (DESIGN.md) needs doorways of at least 0.9 m,
-places between 0.05 and 1.2 m high, each with a free base pose within arm's reach in front of it, and
-door swings and drawer travel clear of other furniture.
+Every error is a LayoutError naming the node. The robot (DESIGN.md; its numbers are a `RobotSpec`) needs
+doorways of at least its `min_doorway` (0.9 m), places within its `place_heights` (0.05 to 1.2 m), each with a free
+base pose within its `reach` in front of it, and door swings and drawer travel clear of other furniture.
 """
 
 from __future__ import annotations
@@ -18,26 +18,23 @@ from homer_sim.home.floorplan import FloorPlan, floor_plan
 from homer_sim.home.furniture import KINDS, Furniture, Place, footprint, furniture_geometry, local_to_world
 from homer_sim.home.layout import FACING_YAW, Layout
 from homer_sim.home.placement import base_height, place_world, start_poses
+from homer_sim.robot_spec import ROBOT, RobotSpec
 
-MIN_DOORWAY = 0.9  # m
-PLACE_HEIGHT = (0.05, 1.2)  # m
-ROBOT_RADIUS = 0.3  # m, base footprint
-ROBOT_REACH = 0.65  # m, base centre to the nearest point of a place, horizontally
 BASE_DISTANCES = np.arange(0.35, 1.21, 0.05)  # m from the access edge to the base centre
 BASE_OFFSETS = np.arange(-0.6, 0.61, 0.1)  # m along the access edge
 
 
-def validate_layout(layout: Layout) -> None:
-    """Raise LayoutError on the first problem found; return None for a sound layout."""
+def validate_layout(layout: Layout, robot: RobotSpec = ROBOT) -> None:
+    """Raise LayoutError on the first problem found for `robot`; return None for a sound layout."""
     _check_names(layout)
-    _check_walls(layout)
+    _check_walls(layout, robot)
     _check_furniture(layout)
     _check_objects(layout)
     start_poses(layout)  # every object fits on its place
     plan = floor_plan(layout)
     for f in layout.furniture:
         _check_swings(layout, plan, f)
-        _check_places(layout, plan, f)
+        _check_places(layout, plan, f, robot)
 
 
 def _check_names(layout: Layout) -> None:
@@ -50,15 +47,15 @@ def _check_names(layout: Layout) -> None:
         seen.add(name)
 
 
-def _check_walls(layout: Layout) -> None:
+def _check_walls(layout: Layout, robot: RobotSpec) -> None:
     for wall in layout.walls:
         (ax, ay), (bx, by) = wall.start, wall.end
         if ax != bx and ay != by:
             raise LayoutError(f"wall {wall.name or wall.start}: walls must be axis-aligned")
         for start, end in wall.doorways:
-            if end - start < MIN_DOORWAY - 1e-9:
+            if end - start < robot.min_doorway - 1e-9:
                 raise LayoutError(f"wall {wall.name}: doorway at {start:.2f}-{end:.2f} m is {end - start:.2f} m "
-                                  f"wide, narrower than the robot's {MIN_DOORWAY} m")
+                                  f"wide, narrower than the robot's {robot.min_doorway} m")
             if start < 0 or end > wall.length:
                 raise LayoutError(f"wall {wall.name}: doorway {start}-{end} m lies beyond the wall")
 
@@ -155,20 +152,23 @@ def _check_swings(layout: Layout, plan: FloorPlan, f: Furniture) -> None:
                               "is blocked by furniture or a wall")
 
 
-def _check_places(layout: Layout, plan: FloorPlan, f: Furniture) -> None:
+def _check_places(layout: Layout, plan: FloorPlan, f: Furniture, robot: RobotSpec) -> None:
     for k, place in enumerate(furniture_geometry(f).places):
         opened = _open_obstacles(layout, f, place)
         world = place_world(layout, f, place, opened=True)
-        if not PLACE_HEIGHT[0] - 1e-9 <= world["z"] <= PLACE_HEIGHT[1] + 1e-9:
+        low, high = robot.place_heights
+        if not low - 1e-9 <= world["z"] <= high + 1e-9:
             raise LayoutError(f"{f.name}: place {k} at {world['z']:.2f} m is out of the robot's reach "
-                              f"({PLACE_HEIGHT[0]}-{PLACE_HEIGHT[1]} m)")
-        if base_pose_for(layout, plan, f, world["rect"], opened) is None:
+                              f"({low}-{high} m)")
+        if base_pose_for(layout, plan, f, world["rect"], opened, robot) is None:
             raise LayoutError(f"{f.name}: place {k} has no free robot base pose within "
-                              f"{ROBOT_REACH} m in front of it")
+                              f"{robot.reach} m in front of it")
 
 
-def base_pose_for(layout: Layout, plan: FloorPlan, f: Furniture, rect: tuple, obstacles: list[tuple]):
-    """A free robot base position (x, y, yaw facing the furniture) from which `rect` is within reach, or None."""
+def base_pose_for(layout: Layout, plan: FloorPlan, f: Furniture, rect: tuple, obstacles: list[tuple],
+                  robot: RobotSpec = ROBOT):
+    """A free base position of `robot` (x, y, yaw facing the furniture) from which `rect` is within its reach, or
+    None."""
     z0 = base_height(layout, f)
     for normal, half_depth, half_width in access_sides(f):
         tangent = np.array([-normal[1], normal[0]])
@@ -180,9 +180,9 @@ def base_pose_for(layout: Layout, plan: FloorPlan, f: Furniture, rect: tuple, ob
                 x, y, _ = local_to_world(f, np.array([local[0], local[1], 0.0]), z0)
                 nearest_dx = max(rect[0] - x, 0.0, x - rect[2])
                 nearest_dy = max(rect[1] - y, 0.0, y - rect[3])
-                if math.hypot(nearest_dx, nearest_dy) > ROBOT_REACH:
+                if math.hypot(nearest_dx, nearest_dy) > robot.reach:
                     continue
-                if plan.disk_is_free(float(x), float(y), ROBOT_RADIUS, obstacles):
+                if plan.disk_is_free(float(x), float(y), robot.footprint_radius, obstacles):
                     yaw = f.yaw + math.atan2(-normal[1], -normal[0])
                     return float(x), float(y), yaw
     return None

@@ -18,11 +18,12 @@ import numpy as np
 from homer_sim.clock import DAY_END_MIN, DAY_START_MIN, GRID_MIN
 from homer_sim.errors import HomerError
 from homer_sim.graph import INSIDE, RELATION_NAMES, SceneGraph
-from homer_sim.home.floorplan import find_path
 from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
-from homer_sim.person.avatar import Avatar, AvatarError
+from homer_sim.person.avatar import Avatar
 from homer_sim.person.handling import Handling
+from homer_sim.person.state import DayState
+from homer_sim.person.walking import Walker
 from homer_sim.world import World
 
 log = logging.getLogger(__name__)
@@ -48,8 +49,13 @@ class DayLog:
     schedule: list[tuple[str, float, float]] = field(default_factory=list)
 
 
-class Executor(Handling):
-    """Runs timed script actions in a World that has an avatar."""
+class Executor:
+    """Runs timed script actions in a World that has an avatar.
+
+    Builds the parts that act for the person and hands each what it uses: a `Walker` (walking) and a
+    `Handling` (grasps, placements, doors and drawers), both sharing the day's `DayState` (minute, random stream,
+    last observed graph), which the executor advances; it observes the scene graph and keeps the day's log.
+    """
 
     def __init__(self, world: World, observer: Callable[[World], SceneGraphObserver] = SceneGraphObserver,
                  recording=None) -> None:
@@ -61,31 +67,55 @@ class Executor(Handling):
         self.nodes = world.layout.node_names()
         self.movable = set(world.object_names)
         self.rooms = set(world.layout.room_names())
-        self._object_of_body = {int(b): n for b, n in zip(world.object_body_ids, world.object_names, strict=True)}
-        self.parts = {}
+        self.parts: dict[str, list] = {}
         for art in world.articulations.values():
             self.parts.setdefault(art.furniture, []).append(art)
-        self.dynamic_obstacles: Callable[[], np.ndarray | None] | None = None
-        self._paths: dict[tuple, list] = {}
-        self.minute = float(DAY_START_MIN)
-        self.rng = np.random.default_rng(0)
+        self.day = DayState(float(DAY_START_MIN), np.random.default_rng(0))
         self.log = DayLog()
-        self._grabbed_from: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-        self.grabbed_at: dict[str, float] = {}  # object -> routine minute the person last took it in hand
+        self.walker = Walker(world, self.avatar, self.spots, self.day, self.movable, self.rooms, recording)
+        self.hands = Handling(world, self.avatar, self.spots, self.day, self.walker, self.observe, self.parts,
+                              self.movable, self.rooms, recording)
+
+    @property
+    def minute(self) -> float:
+        """The routine minute the person's day has reached."""
+        return self.day.minute
+
+    @minute.setter
+    def minute(self, value: float) -> None:
+        self.day.minute = value
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The day's random stream."""
+        return self.day.rng
+
+    @property
+    def grabbed_at(self) -> dict[str, float]:
+        """Object -> the routine minute the person last took it in hand today."""
+        return self.hands.grabbed_at
+
+    @property
+    def dynamic_obstacles(self) -> Callable[[], np.ndarray | None] | None:
+        """Extra blocked grid cells for each walk (see `Walker`), or None."""
+        return self.walker.dynamic_obstacles
+
+    @dynamic_obstacles.setter
+    def dynamic_obstacles(self, cells: Callable[[], np.ndarray | None] | None) -> None:
+        self.walker.dynamic_obstacles = cells
 
     # --- day --------------------------------------------------------------------------------------------
     def start_day(self, rng: np.random.Generator) -> None:
         self.world.reset_settled()
         self.avatar.reset()
-        self.rng = rng
-        self.minute = float(DAY_START_MIN)
+        self.day.rng = rng
+        self.day.minute = float(DAY_START_MIN)
         self.log = DayLog()
-        self._grabbed_from = {}
-        self.grabbed_at = {}
-        self._graph = self.observer.observe_all()
+        self.hands.start_day()
+        self.day.graph = self.observer.observe_all()
 
     def carried_indices(self) -> list[int]:
-        return [self.world.object_index(n) for n in self.avatar.carried()]
+        return self.hands.carried_indices()
 
     def person_outside(self) -> bool:
         return self.world.layout.room_at(self.avatar.x, self.avatar.y) == "outside"
@@ -101,13 +131,13 @@ class Executor(Handling):
         return graph
 
     def _record_moves(self, graph: SceneGraph) -> None:
-        previous = self._graph
+        previous = self.day.graph
         changed = np.flatnonzero((graph.parent != previous.parent) | (graph.relation != previous.relation))
         for i in changed:
             name = self.nodes[i]
             self.log.moves.append((round(self.minute, 2), name, previous.parent_of(name) or "",
                                    graph.parent_of(name) or "", RELATION_NAMES[int(graph.relation[i])]))
-        self._graph = graph
+        self.day.graph = graph
 
     def tick(self, minute: int) -> None:
         """Take the snapshot of grid minute `minute`."""
@@ -119,59 +149,40 @@ class Executor(Handling):
         if self.recording is not None:
             self.recording.log_scene_graph(graph, routine_minute=float(minute))
 
-    # --- moving the person ------------------------------------------------------------------------------
-    def anchor(self, node: str) -> str:
-        """The furniture or room a node is reached at: an object's first non-movable ancestor."""
-        graph = self._graph
-        while node in self.movable:
-            node = graph.parent_of(node)
-        return node
-
+    # --- what the person does (see `Walker` and `Handling`) -----------------------------------------------
     def go(self, node: str) -> None:
-        """Walk to where `node` is used (an object: where it lies now)."""
-        anchor = self.anchor(node)
-        if anchor in self.rooms and node in self.movable:
-            pos = self.world.object_pose(node)[0]
-            x, y, _ = self.spots.free_floor_near((pos[0], pos[1]), anchor)
-            yaw = math.atan2(pos[1] - y, pos[0] - x)
-        else:
-            x, y, yaw = self.spots.standing_for(anchor)
-        self.walk_to(x, y, yaw)
+        """Walk to where `node` is used (see `Walker.go`)."""
+        self.walker.go(node)
 
-    def walk_to(self, x: float, y: float, yaw: float) -> None:
-        if math.hypot(x - self.avatar.x, y - self.avatar.y) > 0.05:
-            key = (self.spots.plan.cell(self.avatar.x, self.avatar.y), self.spots.plan.cell(x, y))
-            extra = self.dynamic_obstacles() if self.dynamic_obstacles else None
-            path = self._paths.get(key) if extra is None else None
-            if path is None:
-                path = find_path(self.spots.blocked, self.spots.plan, (self.avatar.x, self.avatar.y), (x, y), extra)
-                if path is None:
-                    raise AvatarError(f"no path from {self.avatar.x:.2f}, {self.avatar.y:.2f} to {x:.2f}, {y:.2f}")
-                if extra is None:
-                    self._paths[key] = path
-            if self.recording is not None:
-                self.recording.log_path(path, routine_minute=self.minute)
-        self.avatar.move_to(x, y, yaw)
-        if self.recording is not None:
-            self.recording.log_body_poses(self.world.data, force=True)
+    def grab(self, name: str) -> None:
+        """Take `name` into a free hand (see `Handling.grab`)."""
+        self.hands.grab(name)
+
+    def put(self, name: str, target: str, relation: int | None) -> None:
+        """Put `name` ON/INSIDE `target` (see `Handling.put`)."""
+        self.hands.put(name, target, relation)
+
+    def wear(self, name: str) -> None:
+        """Put on `name` (see `Handling.wear`)."""
+        self.hands.wear(name)
 
     # --- script actions ---------------------------------------------------------------------------------
     def open(self, furniture: str) -> None:
         """Open a door now; a chest of drawers opens the drawer needed when something is taken or put."""
         parts = self.parts.get(furniture, [])
         if parts and all(a.joint_type == "hinge" for a in parts):
-            self.go(furniture)
-            self.ensure_open(parts, [])
+            self.walker.go(furniture)
+            self.hands.ensure_open(parts, [])
 
     def close(self, furniture: str) -> None:
         parts = [a for a in self.parts.get(furniture, []) if self.world.openness(a.name) > 0.02]
         if parts:
-            self.go(furniture)
-            self.close_parts(parts)
+            self.walker.go(furniture)
+            self.hands.close_parts(parts)
 
     def drop(self, name: str) -> None:
         room = self.world.layout.room_at(self.avatar.x, self.avatar.y)
-        self.put(name, room, INSIDE)
+        self.hands.put(name, room, INSIDE)
 
     def do(self, action) -> None:
         """Carry out one script action (verbs as in homer_sim.person.scripts); time-only verbs move the person to
@@ -179,14 +190,14 @@ class Executor(Handling):
         verb, args = action.verb, action.args
         handlers = {
             "walk": lambda: self.go_unless_carried(args[0]),
-            "grab": lambda: self.grab(args[0]),
+            "grab": lambda: self.hands.grab(args[0]),
             "open": lambda: self.open(args[0]),
             "close": lambda: self.close(args[0]),
-            "putback": lambda: self.put(args[0], args[1], None),
-            "putin": lambda: self.put(args[0], args[1], INSIDE),
-            "putobjback": lambda: self.put_back_where_grabbed(args[0]),
-            "puton": lambda: self.wear(args[0]),
-            "putoff": lambda: self.take_off(args[0]),
+            "putback": lambda: self.hands.put(args[0], args[1], None),
+            "putin": lambda: self.hands.put(args[0], args[1], INSIDE),
+            "putobjback": lambda: self.hands.put_back_where_grabbed(args[0]),
+            "puton": lambda: self.hands.wear(args[0]),
+            "putoff": lambda: self.hands.take_off(args[0]),
             "drop": lambda: self.drop(args[0]),
         }
         if verb in handlers:
@@ -196,7 +207,7 @@ class Executor(Handling):
 
     def go_unless_carried(self, node: str) -> None:
         if node not in self.avatar.carried():
-            self.go(node)
+            self.walker.go(node)
 
     def _perform(self, activity: str, action) -> None:
         if self.recording is not None:
@@ -208,7 +219,7 @@ class Executor(Handling):
 
     def run_activity(self, script, start: float, end: float) -> None:
         """Carry out one script over routine minutes [start, end], without snapshots."""
-        for minute, action in timed_actions(script, start, end, self.rng):
+        for minute, action in timed_actions(script, start, end, self.day.rng):
             self.minute = minute
             self._perform(script.activity, action)
 

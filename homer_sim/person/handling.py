@@ -1,25 +1,29 @@
 """How the person handles things: grasping, carrying, putting down, opening and closing, in physics.
 
-`Handling` is the half of the executor that touches objects and articulations; `homer_sim.person.executor.Executor`
-adds the day, walking and script dispatch. Grasps weld an object to a hand at its current relative pose and
-lift it with physics; placements release it at a sampled free spot where it settles; doors and drawers move
-along minimum-jerk paths with physics stepping in between.
+`Handling` is the part of the person that touches objects and articulations; `homer_sim.person.executor.Executor`
+builds it and adds the day and script dispatch, `homer_sim.person.walking.Walker` the walking. Grasps weld an
+object to a hand at its current relative pose and lift it with physics; placements release it at a sampled free
+spot where it settles; doors and drawers move along minimum-jerk paths with physics stepping in between.
 """
 
 from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
 
 from homer_sim.errors import PhysicsError
-from homer_sim.graph import INSIDE, ON
+from homer_sim.graph import INSIDE, ON, SceneGraph
 from homer_sim.home.catalog import CATALOG
 from homer_sim.home.placement import yaw_quat
-from homer_sim.home.spots import PlacementError, Spot
-from homer_sim.person.avatar import AvatarError, compose, relative_pose
+from homer_sim.home.spots import PlacementError, Spot, Spots
+from homer_sim.person.avatar import Avatar, AvatarError, compose, relative_pose
+from homer_sim.person.state import DayState
+from homer_sim.person.walking import Walker
+from homer_sim.world import World
 
 log = logging.getLogger(__name__)
 
@@ -39,8 +43,40 @@ class DoorBlocked(AvatarError):
 
 
 class Handling:
-    """Grasping, placing and articulations; mixed into the Executor, whose state it uses (world, avatar,
-    spots, observer, rng, the observed graph) and whose walking (`go`) and observing (`observe`) it calls."""
+    """Grasping, placing and articulations by the `avatar` in `world`.
+
+    Inputs, declared: the world, the avatar, the free spots (`spots`), the day so far (`day`: its random stream
+    samples spots, its graph says what rests on what, its minute stamps grasps), the `walker` that takes the
+    person where a node is used, `observe` (reads the scene graph after a put, recording what moved), the doors
+    and drawers of each furniture (`parts`), the names of the movable objects and of the rooms, and an optional
+    recording. State: where each object was taken from today and when (`grabbed_at`, routine minutes).
+    """
+
+    def __init__(self, world: World, avatar: Avatar, spots: Spots, day: DayState, walker: Walker,
+                 observe: Callable[[], SceneGraph], parts: dict[str, list], movable: set[str], rooms: set[str],
+                 recording=None) -> None:
+        self.world = world
+        self.avatar = avatar
+        self.spots = spots
+        self.day = day
+        self.walker = walker
+        self.observe = observe
+        self.parts = parts
+        self.movable = movable
+        self.rooms = rooms
+        self.recording = recording
+        self._object_of_body = {int(b): n for b, n in zip(world.object_body_ids, world.object_names, strict=True)}
+        self._grabbed_from: dict[str, tuple[np.ndarray, np.ndarray, str]] = {}
+        self.grabbed_at: dict[str, float] = {}  # object -> routine minute the person last took it in hand
+
+    def start_day(self) -> None:
+        """Forget what was taken where on an earlier day."""
+        self._grabbed_from = {}
+        self.grabbed_at = {}
+
+    def carried_indices(self) -> list[int]:
+        """Object indices of what the person holds or wears."""
+        return [self.world.object_index(n) for n in self.avatar.carried()]
 
     # --- physics helpers --------------------------------------------------------------------------------
     def step(self, n: int) -> None:
@@ -155,7 +191,7 @@ class Handling:
             raise blocked
         exclude = set(self.carried_indices()) | {self.world.object_index(name)}
         for index, _ in self.spots.places_of(furniture, INSIDE):
-            spot = self.spots.free_spot(name, furniture, index, self.rng, exclude)
+            spot = self.spots.free_spot(name, furniture, index, self.day.rng, exclude)
             if spot is not None:
                 log.debug("%s: pushed back into %s so the door closes", name, furniture)
                 self.world.set_object_pose(name, spot.pos, yaw_quat(spot.yaw))
@@ -172,7 +208,7 @@ class Handling:
             raise blocked
         exclude = set(self.carried_indices()) | {self.world.object_index(name)}
         try:
-            spot = self.spots.floor_spot(name, room, (self.avatar.x, self.avatar.y), self.rng, exclude)
+            spot = self.spots.floor_spot(name, room, (self.avatar.x, self.avatar.y), self.day.rng, exclude)
         except PlacementError:
             raise blocked from None
         log.debug("%s: set aside so a door opens", name)
@@ -187,15 +223,15 @@ class Handling:
         hand = self.avatar.free_hand()
         if hand is None:
             raise AvatarError(f"cannot grab {name}: both hands hold {', '.join(self.avatar.held.values())}")
-        self.go(name)
-        container = self.anchor(name)
+        self.walker.go(name)
+        container = self.walker.anchor(name)
         opened: list = []
-        if self._graph.relation_of(name) == "INSIDE" or container in self.parts:
+        if self.day.graph.relation_of(name) == "INSIDE" or container in self.parts:
             self.ensure_open(self.part_holding(container, self.world.object_pose(name)[0]), opened)
         pos, quat = self.world.object_pose(name)
         self._grabbed_from[name] = (pos.copy(), quat.copy(), container)
-        self.grabbed_at[name] = self.minute
-        riders = [c for c in self._graph.children_of(name) if c in self.movable and c not in self.avatar.carried()]
+        self.grabbed_at[name] = self.day.minute
+        riders = [c for c in self.day.graph.children_of(name) if c in self.movable and c not in self.avatar.carried()]
         hand_body = self.avatar.hands[hand]
         self.avatar.set_hand(hand, pos, follow=False)
         mujoco.mj_kinematics(self.world.model, self.world.data)
@@ -246,11 +282,11 @@ class Handling:
         exclude = set(self.carried_indices())
         if target in self.rooms:
             if self.world.layout.room_at(self.avatar.x, self.avatar.y) != target:
-                self.go(target)
-            spot = self.spots.floor_spot(name, target, (self.avatar.x, self.avatar.y), self.rng, exclude)
+                self.walker.go(target)
+            spot = self.spots.floor_spot(name, target, (self.avatar.x, self.avatar.y), self.day.rng, exclude)
             self.release(name, spot)
         elif target in self.movable:
-            self.go(target)
+            self.walker.go(target)
             self.release(name, self._on_object(name, target))
         else:
             self.put_nearby(name, target, relation)
@@ -259,7 +295,7 @@ class Handling:
     def _on_object(self, name: str, target: str) -> Spot:
         """A spot on (or in) object `target`, above whatever already lies there."""
         pos = self.world.object_pose(target)[0]
-        x, y = pos[:2] + self.rng.uniform(-0.01, 0.01, size=2)
+        x, y = pos[:2] + self.day.rng.uniform(-0.01, 0.01, size=2)
         z = self.spots.landing_z(name, (x, y), pos[2] + self._cls(target).size[2] / 2 + 0.3)
         return Spot((float(x), float(y), z), 0.0, target, None)
 
@@ -268,16 +304,16 @@ class Handling:
         if not places:
             raise PlacementError(f"{target} has no place to put {name}")
         start_level = next((o.level for o in self.world.layout.objects if o.name == name and o.parent == target), None)
-        order = [places[i] for i in self.rng.permutation(len(places))]
+        order = [places[i] for i in self.day.rng.permutation(len(places))]
         order.sort(key=lambda kp: kp[0] != start_level)
-        self.go(target)
+        self.walker.go(target)
         for index, place in order:
             opened: list = []
             if place.relation == INSIDE or place.part is not None:
                 needed = [a for a in self.parts.get(target, []) if a.joint_type == "hinge" or
                           a.name.endswith("/" + (place.part or ""))]
                 self.ensure_open(needed, opened)
-            spot = self.spots.free_spot(name, target, index, self.rng, exclude)
+            spot = self.spots.free_spot(name, target, index, self.day.rng, exclude)
             if spot is not None:
                 self.release(name, spot)
                 self.close_parts(opened)
@@ -314,7 +350,7 @@ class Handling:
         if anchor in self.rooms or z - self._cls(name).size[2] / 2 > bottom + 0.01:
             self.put(name, anchor, None)
             return
-        self.go(anchor)
+        self.walker.go(anchor)
         self.release(name, Spot((float(pos[0]), float(pos[1]), z), 2 * math.atan2(quat[3], quat[0]), anchor, None))
         self.observe()
 

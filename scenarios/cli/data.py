@@ -75,8 +75,16 @@ def cmd_compat_check(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_import_homer_plus(args: argparse.Namespace) -> int:
+    from homer_sim.data.homer_plus import import_household
+
+    result = import_household(args.path, args.out, args.name)
+    emit(result, args.json, [f"{k}: {v}" for k, v in result.items()])
+    return 0
+
+
 def add_commands(subparsers: argparse._SubParsersAction) -> None:
-    """Add `generate`, `dataset stats`, `simulate-day` and `compat-check` to the `homer` parser."""
+    """Add `generate`, `dataset stats`, `simulate-day`, `compat-check` and `import homer-plus` to the parser."""
     gen = subparsers.add_parser("generate", help="simulate households' days into a HOMER-like dataset")
     gen.add_argument("--households", type=int, default=5, help="how many households (5)")
     gen.add_argument("--train-days", type=int, default=50, help="training days per household (50)")
@@ -111,3 +119,15 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     compat.add_argument("--scripts", type=Path, required=True, help="folder laid out <activity>/<name>.txt")
     compat.add_argument("--json", action="store_true", help="print one JSON object")
     compat.set_defaults(func=cmd_compat_check)
+
+    imports = subparsers.add_parser("import", help="convert external data into a homer-sim dataset")
+    import_commands = imports.add_subparsers(dest="import_command", required=True, metavar="FORMAT")
+    homer_plus = import_commands.add_parser(
+        "homer-plus", help="one HOMER+ household (HouseholdX/processed_seqLM_coarse) -> dataset folder",
+        description="Read common_data.json, train/*.pt and test/*.pt (weights only) of one household and write it "
+        "into DIR, keeping the upstream train/test split; a DIR holding other HOMER+ households gains this one.")
+    homer_plus.add_argument("path", type=Path, help="the unpacked HouseholdX folder (or its processed_seqLM_coarse)")
+    homer_plus.add_argument("--out", type=Path, required=True, help="dataset folder to create or extend")
+    homer_plus.add_argument("--name", default=None, help="household name in the dataset (default: the folder's)")
+    homer_plus.add_argument("--json", action="store_true", help="print one JSON object")
+    homer_plus.set_defaults(func=cmd_import_homer_plus)

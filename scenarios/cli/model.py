@@ -11,7 +11,7 @@ from pathlib import Path
 
 from homer_sim.clock import DEFAULT_WINDOW_MIN as HEADLINE_WINDOW_MIN
 from model.names import DEFAULT_METHODS, METHODS
-from model.report import format_table
+from model.report import format_f1_table, format_table
 
 
 def _methods(text: str) -> list[str]:
@@ -52,6 +52,9 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
                           help="checkpoint cache folder (default DATA/checkpoints); reused on the next run")
     evaluate.add_argument("--households", default=None, help="comma-separated subset of households (default all)")
     evaluate.add_argument("--train-days", type=int, default=None, help="use only the first N training days")
+    evaluate.add_argument("--metric", choices=("paper", "f1", "both"), default="paper",
+                          help="paper: used/unused object percentages at --window; f1: SLaTe-PRO's relocation F1 "
+                          "per lookahead step 10..60 min; both (default paper; each tuned for its own metric)")
     evaluate.add_argument("--quiet", action="store_true", help="no progress bars on stderr")
     evaluate.add_argument("--json", action="store_true", help="print one JSON object")
     evaluate.set_defaults(func=cmd_evaluate)
@@ -83,6 +86,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
     households = [h.strip() for h in args.households.split(",")] if args.households else None
     result = evaluate(args.data, args.methods, args.window, args.checkpoints, households, args.train_days,
-                      progress=not args.quiet)
-    print(json.dumps(result) if args.json else format_table(result))
+                      progress=not args.quiet, metric=args.metric)
+    tables = [t for t, on in ((format_table, args.metric != "f1"), (format_f1_table, args.metric != "paper")) if on]
+    print(json.dumps(result) if args.json else "\n\n".join(table(result) for table in tables))
     return 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from planners.grasp_suite import (
+from planners.suites.grasp_suite import (
     DEFAULT_TRIALS,
     HOLD_SECONDS,
     MAX_SLIP,

@@ -10,7 +10,8 @@ import pytest
 from homer_sim.errors import HomerError
 from homer_sim.home.catalog import CATALOG
 from homer_sim.recording import read_recording
-from planners.grasp_suite import (
+from planners.grasps.candidate import ungraspable_reason
+from planners.suites.grasp_suite import (
     MAX_SLIP,
     MIN_LIFT,
     TARGET_CLASS,
@@ -22,7 +23,6 @@ from planners.grasp_suite import (
     suite_classes,
     summarise,
 )
-from planners.grasps import ungraspable_reason
 
 
 def test_suite_lists_every_apartment_class_once_with_reasons_for_exclusions() -> None:

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from homer_sim.home.catalog import CATALOG
-from planners.container_grasps import handle_grasps
-from planners.grasps import (
+from planners.grasps.above import RAISED_HOLD, offset_grasps, raised_grasps, rim_approach, squared_grasps, top_grasps
+from planners.grasps.candidate import (
     FINGER_HALF_THICKNESS,
     GRIPPER_OPEN,
     MAX_WIDTH,
@@ -20,10 +20,13 @@ from planners.grasps import (
     SUPPORT_CLEARANCE,
     TOP_MARGIN,
     TOP_NARROW_MARGIN,
+    Family,
+    GraspKind,
     disturbed,
-    footprint,
 )
-from planners.shelf_grasps import (
+from planners.grasps.features import handle_grasps
+from planners.grasps.geometry import footprint
+from planners.grasps.shelf import (
     PALM_MARGIN,
     ROLL,
     ROLL_TIP_CLEARANCE,
@@ -38,7 +41,6 @@ from planners.shelf_grasps import (
     shelf_grasps,
     side_grasps,
 )
-from planners.top_grasps import RAISED_HOLD, offset_grasps, raised_grasps, rim_approach, squared_grasps, top_grasps
 
 OUT = np.array([1.0, 0.0])  # out of the furniture's front, towards the robot
 
@@ -70,15 +72,15 @@ def test_a_turned_box_gets_grasps_square_to_its_own_faces() -> None:
     veg = CATALOG["food_vegetable"]  # 15 x 10 cm: turned 30 degrees, 16 cm across the front, 10 cm square to a face
     position = np.array([0.0, 0.0, veg.size[2] / 2])
     grasps = shelf_grasps(veg, position, _yawed(30.0), OUT, front=0.2)
-    faced = [g for g in grasps if g.kind.endswith("-faced")]
+    faced = [g for g in grasps if g.label.endswith("-faced")]
     # across the front nothing fits; only front to back, last ("-along", the pads in the approach's plane), and
     # side grasps halfway to the face (see the next test)
-    assert faced and not [g for g in grasps if not g.kind.endswith(("-faced", "-along", "-halfway"))]
+    assert faced and not [g for g in grasps if not g.label.endswith(("-faced", "-along", "-halfway"))]
     for grasp in faced:  # the fingers close along one of the object's own axes
         finger = grasp.rotation[:, 1]
         assert min(abs(math.degrees(math.atan2(finger[1], finger[0])) - a) for a in (30, 120, -60, -150)) < 1e-6
     assert shelf_grasps(veg, position, _yawed(0.0), OUT, front=0.2) != []  # square already: no "-faced" copies
-    assert not [g for g in shelf_grasps(veg, position, _yawed(0.0), OUT, 0.2) if g.kind.endswith("-faced")]
+    assert not [g for g in shelf_grasps(veg, position, _yawed(0.0), OUT, 0.2) if g.label.endswith("-faced")]
 
 
 def test_a_box_turned_past_four_degrees_also_gets_side_grasps_halfway_to_its_face() -> None:
@@ -87,24 +89,24 @@ def test_a_box_turned_past_four_degrees_also_gets_side_grasps_halfway_to_its_fac
     rice = CATALOG["food_rice"]
     position = np.array([0.0, 0.0, rice.size[2] / 2])
     grasps = shelf_grasps(rice, position, _yawed(18.0), OUT, front=0.12)
-    kinds = [g.kind for g in grasps]
-    halfway = [g for g in grasps if g.kind.endswith("-halfway")]
-    assert [g.kind for g in halfway] == ["side-halfway", "side-high-halfway"]
-    assert max(kinds.index(g.kind) for g in grasps if g.kind.endswith("-faced") and "-along" not in g.kind) < (
+    kinds = [g.label for g in grasps]
+    halfway = [g for g in grasps if g.label.endswith("-halfway")]
+    assert [g.label for g in halfway] == ["side-halfway", "side-high-halfway"]
+    assert max(kinds.index(g.label) for g in grasps if g.label.endswith("-faced") and "-along" not in g.label) < (
         kinds.index("side-halfway"))
     for grasp in halfway:
         x = grasp.rotation[:, 0]
         assert math.degrees(math.atan2(-x[1], -x[0])) == pytest.approx(9.0)
         assert (grasp.position[:2] @ -x[:2]) <= 0.12 / math.cos(math.radians(9.0)) - 0.027 + 1e-9
         assert grasp.pre_opening <= GRIPPER_OPEN
-    assert not [g for g in shelf_grasps(rice, position, _yawed(3.5), OUT, 0.12) if g.kind.endswith("-halfway")]
+    assert not [g for g in shelf_grasps(rice, position, _yawed(3.5), OUT, 0.12) if g.label.endswith("-halfway")]
 
 
 def test_grasps_from_above_open_wide_then_narrow_and_stop_above_the_support() -> None:
     paste = CATALOG["tooth_paste"]  # 19 x 4.5 x 3.5 cm: only across its narrow side
     position = np.array([0.0, 0.0, paste.size[2] / 2])
     grasps = top_grasps(paste, position, _yawed(0.0), np.array([-1.0, 0.0]))
-    assert [g.kind for g in grasps] == ["top", "top-narrow"]
+    assert [g.label for g in grasps] == ["top", "top-narrow"]
     assert [g.pre_opening for g in grasps] == pytest.approx([paste.size[1] / 2 + TOP_MARGIN,
                                                              paste.size[1] / 2 + TOP_NARROW_MARGIN])
     tip_z = grasps[0].position[2] - PAD_HALF  # the hand points down: the fingertips are below the grip site
@@ -117,16 +119,16 @@ def test_handled_objects_are_taken_by_the_handle_from_above_or_pitched_into_a_sh
     body_top = bag.size[2] - height
     position = np.array([0.0, 0.0, bag.size[2] / 2])
     from_above = handle_grasps(bag, position, _yawed(30.0))
-    assert [g.kind for g in from_above] == ["handle", "handle-turned", "handle-narrow", "handle-turned-narrow"]
+    assert [g.label for g in from_above] == ["handle", "handle-turned", "handle-narrow", "handle-turned-narrow"]
     first = from_above[0]
     finger = first.rotation[:, 1]
     assert abs(math.degrees(math.atan2(finger[1], finger[0]))) == pytest.approx(120.0)  # across the handle
     assert first.pre_opening == pytest.approx(width / 2 + TOP_MARGIN)
     assert first.position[2] - PAD_HALF >= body_top + SUPPORT_CLEARANCE - 1e-9  # the fingertips stay off the body
     assert first.position[2] < bag.size[2]  # and the pads hold the handle
-    assert [g.kind for g in top_grasps(bag, position, _yawed(30.0), np.zeros(2))] == [g.kind for g in from_above]
+    assert [g.label for g in top_grasps(bag, position, _yawed(30.0), np.zeros(2))] == [g.label for g in from_above]
     pitched = shelf_grasps(bag, position, _yawed(0.0), OUT, front=0.2)  # the handle runs front to back
-    assert pitched and all(g.kind.startswith("handle-") and g.rotation[2, 0] < -0.4 for g in pitched)  # down
+    assert pitched and all(g.label.startswith("handle-") and g.rotation[2, 0] < -0.4 for g in pitched)  # down
     for g in pitched:
         pitch = math.asin(-g.rotation[2, 0])
         tip_drop = PAD_HALF * math.sin(pitch) + FINGER_HALF_THICKNESS * math.cos(pitch)
@@ -174,9 +176,9 @@ def test_a_rolled_straight_down_grasp_keeps_the_pads_and_lowers_the_wrist() -> N
     deck = CATALOG["deck_of_cards"]  # 2 cm high on a shelf: straight down, the wrist meets the shelf above
     position = np.array([0.0, 0.0, 0.82 + deck.size[2] / 2])
     grasps = shelf_grasps(deck, position, _yawed(0.0), OUT, 0.06)
-    down = next(g for g in grasps if g.kind == "shelf-90" and abs(g.rotation[:2, 1] @ OUT) > 0.99)
-    rolled = [g for g in grasps if g.kind.startswith("shelf-90-rolled")]
-    assert [g.kind for g in rolled] == ["shelf-90-rolled+", "shelf-90-rolled-"]
+    down = next(g for g in grasps if g.label == "shelf-90" and abs(g.rotation[:2, 1] @ OUT) > 0.99)
+    rolled = [g for g in grasps if g.label.startswith("shelf-90-rolled")]
+    assert [g.label for g in rolled] == ["shelf-90-rolled+", "shelf-90-rolled-"]
     direct = rolled_grasps(down, 0.82, 0.84)
     assert all(np.allclose(a.rotation, b.rotation) and np.allclose(a.position, b.position)
                for a, b in zip(rolled, direct, strict=True))
@@ -196,7 +198,7 @@ def test_an_off_centre_grasp_keeps_the_near_finger_beside_the_object() -> None:
     position = np.array([0.0, 0.0, charger.size[2] / 2])
     grasp = top_grasps(charger, position, _yawed(0.0), np.array([1.0, 0.0]))[0]
     moved = offset_grasps(charger, _yawed(0.0), grasp)
-    assert [g.kind for g in moved] == ["top-offset+", "top-offset-"]
+    assert [g.label for g in moved] == ["top-offset+", "top-offset-"]
     for g in moved:
         shift = float(np.linalg.norm(g.position - grasp.position))
         assert g.pre_opening == GRIPPER_OPEN
@@ -210,7 +212,7 @@ def test_squared_grasps_turn_the_palm_to_the_drawer_walls_and_open_past_the_turn
     charger = CATALOG["charger"]  # 6 x 4.5 cm, turned 15 degrees in a drawer whose front faces -x
     position = np.array([0.0, 0.0, charger.size[2] / 2])
     squared = squared_grasps(charger, position, _yawed(-75.0), math.pi)
-    assert [g.kind for g in squared] == ["top-squared", "top-turned-squared", "top-narrow-squared",
+    assert [g.label for g in squared] == ["top-squared", "top-turned-squared", "top-narrow-squared",
                                          "top-turned-narrow-squared"]
     top = squared[0]
     assert abs(top.rotation[0, 1]) == pytest.approx(1.0)  # the finger travel along the drawer's depth
@@ -227,14 +229,14 @@ def test_a_box_turned_past_four_degrees_is_taken_square_to_its_face_first() -> N
     dryer = CATALOG["hairdryer"]  # 24 x 9 cm, its long side into the furniture
     position = np.array([0.0, 0.0, dryer.size[2] / 2])
     turned = shelf_grasps(dryer, position, _yawed(6.0), OUT, front=0.2)  # 6.8 degrees slipped 14 mm
-    assert turned[0].kind.endswith("-faced") and any(not g.kind.endswith("-faced") for g in turned)
+    assert turned[0].label.endswith("-faced") and any(not g.label.endswith("-faced") for g in turned)
     slightly = shelf_grasps(dryer, position, _yawed(3.5), OUT, front=0.2)
-    assert not slightly[0].kind.endswith("-faced") and any(g.kind.endswith("-faced") for g in slightly)
+    assert not slightly[0].label.endswith("-faced") and any(g.label.endswith("-faced") for g in slightly)
 
 
 def test_a_bin_is_pinched_deep_at_its_far_rim_lifted_clear_and_hung() -> None:
     from homer_sim.home.shapes import cavity
-    from planners.container_grasps import HANG_RISE, RIM_CLEARANCE, RIM_DEEP
+    from planners.grasps.features import HANG_RISE, RIM_CLEARANCE, RIM_DEEP
 
     cls = CATALOG["basket_for_clothes"]  # 44 x 44 x 32 cm, straight walls
     sz = cls.size[2]
@@ -242,7 +244,7 @@ def test_a_bin_is_pinched_deep_at_its_far_rim_lifted_clear_and_hung() -> None:
     hollow = cavity(cls)
     grasps = top_grasps(cls, position, _yawed(0.0), np.array([-1.0, 0.0]))  # the robot on -x
     first = grasps[0]
-    assert first.kind == "rim" and first.hang
+    assert first.label == "rim" and first.hang
     assert first.position[0] == pytest.approx(hollow.rim_radius + 0.004)  # the far rim, +x
     assert first.position[2] == pytest.approx(sz - RIM_DEEP)  # the pads' whole 5 cm length on the wall
     assert first.rotation[:, 1] @ np.array([1.0, 0.0, 0.0]) == pytest.approx(1.0)  # closing radially
@@ -253,12 +255,12 @@ def test_a_bin_is_pinched_deep_at_its_far_rim_lifted_clear_and_hung() -> None:
     offset = first.position - position
     assert first.lift - (np.linalg.norm(offset) - offset[2]) >= HANG_RISE - 1e-9
     bowl = top_grasps(CATALOG["bowl"], np.array([0.0, 0.0, 0.035]), _yawed(0.0), np.array([-1.0, 0.0]))[0]
-    assert bowl.kind == "rim" and not bowl.hang and bowl.lift == 0.0 and bowl.position[0] < 0  # flared: near rim
+    assert bowl.label == "rim" and not bowl.hang and bowl.lift == 0.0 and bowl.position[0] < 0  # flared: near rim
 
 
 def test_hanging_turns_the_hand_until_the_load_is_straight_below() -> None:
-    from planners.container_grasps import hang_rotation
-    from planners.grasps import top_rotation
+    from planners.grasps.features import hang_rotation
+    from planners.grasps.geometry import top_rotation
 
     rotation = top_rotation(0.0)  # pointing down, fingers along x, z along -y
     grip = np.array([0.2, 0.0, 0.5])
@@ -272,13 +274,13 @@ def test_hanging_turns_the_hand_until_the_load_is_straight_below() -> None:
 
 def test_a_pot_on_a_shelf_is_taken_by_the_handle_facing_the_front_short_of_its_wall() -> None:
     from homer_sim.home.shapes import WALL_THICKNESS, handle_boxes
-    from planners.container_grasps import POT_HANDLE_GAP, pot_handle_grasps
+    from planners.grasps.features import POT_HANDLE_GAP, pot_handle_grasps
 
     cls = CATALOG["cookingpot"]  # handles on body -x and +x
     position = np.array([0.0, 0.0, cls.size[2] / 2])
     out = np.array([1.0, 0.0, 0.0])
     grasps = pot_handle_grasps(cls, position, _yawed(10.0), out)
-    assert [g.kind for g in grasps] == ["pot-handle-0", "pot-handle-30", "pot-handle-45", "pot-handle-60"]
+    assert [g.label for g in grasps] == ["pot-handle-0", "pot-handle-30", "pot-handle-45", "pot-handle-60"]
     (centre, half), _ = handle_boxes(cls)
     h = np.array([math.cos(math.radians(10.0)), math.sin(math.radians(10.0)), 0.0])  # the +x handle, turned
     face = centre[0] - half[0] + WALL_THICKNESS["pot"]
@@ -311,9 +313,9 @@ def test_along_grasps_close_front_to_back_past_what_the_pads_sweep() -> None:
     jam, oil = CATALOG["food_jam"], CATALOG["oil"]
     position = np.array([0.0, 0.0, jam.size[2] / 2])
     bottle = (footprint(oil, np.array([0.02, 0.122, 0.14]), _yawed(0.0)), 0.28)  # 12.2 cm aside, 2 cm further out
-    along = [g for g in shelf_grasps(jam, position, _yawed(0.0), OUT, 0.085, [bottle]) if g.kind.endswith("-along")]
+    along = [g for g in shelf_grasps(jam, position, _yawed(0.0), OUT, 0.085, [bottle]) if g.label.endswith("-along")]
     # at 30 degrees the open out-finger's tip (0.061 m out and down the travel) would strike the floor
-    assert [g.kind for g in along] == ["shelf-45-along", "shelf-60-along"]
+    assert [g.label for g in along] == ["shelf-45-along", "shelf-60-along"]
     for g in along:
         tip = g.position - g.pre_opening * g.rotation[:, 1] + PAD_HALF * g.rotation[:, 0]
         assert tip[2] >= SUPPORT_CLEARANCE
@@ -325,7 +327,7 @@ def test_along_grasps_close_front_to_back_past_what_the_pads_sweep() -> None:
     back = PALM_MARGIN - palm_gap(0.07, -0.08, 0.02, pitch, (least + greatest) / 2)
     assert (g.position - np.array([0.0, 0.0, 0.08])) @ g.rotation[:, 0] == pytest.approx(-back, abs=1e-9)
     close = (footprint(oil, np.array([0.02, 0.055, 0.14]), _yawed(0.0)), 0.28)  # 2 cm off the jar's side
-    assert not [g for g in shelf_grasps(jam, position, _yawed(0.0), OUT, 0.085, [close]) if g.kind.endswith("-along")]
+    assert not [g for g in shelf_grasps(jam, position, _yawed(0.0), OUT, 0.085, [close]) if g.label.endswith("-along")]
 
 
 def test_a_turned_box_gets_along_grasps_in_its_own_plane_first() -> None:
@@ -335,15 +337,15 @@ def test_a_turned_box_gets_along_grasps_in_its_own_plane_first() -> None:
     tea = CATALOG["tea"]
     position = np.array([0.0, 0.0, tea.size[2] / 2])
     grasps = shelf_grasps(tea, position, _yawed(180.0 + 19.0), OUT, 0.2)
-    kinds = [g.kind for g in grasps]
-    faced = [g for g in grasps if g.kind.endswith("-along-faced")]
+    kinds = [g.label for g in grasps]
+    faced = [g for g in grasps if g.label.endswith("-along-faced")]
     plain = [k for k in kinds if k.endswith("-along")]
-    assert faced and plain and max(kinds.index(g.kind) for g in faced) < min(kinds.index(k) for k in plain)
+    assert faced and plain and max(kinds.index(g.label) for g in faced) < min(kinds.index(k) for k in plain)
     axis = np.array([math.cos(math.radians(19.0)), math.sin(math.radians(19.0))])
     for grasp in faced:  # the finger travel's level part lies along the box's long axis
         finger = grasp.rotation[:2, 1] / np.linalg.norm(grasp.rotation[:2, 1])
         assert abs(finger @ axis) == pytest.approx(1.0)
-    assert not [k for k in (g.kind for g in shelf_grasps(tea, position, _yawed(180.0), OUT, 0.2)) if "faced" in k]
+    assert not [k for k in (g.label for g in shelf_grasps(tea, position, _yawed(180.0), OUT, 0.2)) if "faced" in k]
 
 
 def test_an_along_grasp_moves_aside_for_the_palm_only_as_far_as_the_pads_stay_on() -> None:
@@ -360,7 +362,7 @@ def test_a_ball_is_taken_front_to_back_before_across_pitched() -> None:
     neighbours (the fridge's low shelf), an 8 cm apple meets the pads cos 30 * 0.027 + sin 30 * 0.02 = 0.033 m
     along them, past their 2.5 cm half length, and creeps 5 mm in 3 s: front to back first."""
     apple = CATALOG["food_apple"]
-    kinds = [g.kind for g in shelf_grasps(apple, np.array([0.0, 0.0, apple.size[2] / 2]), _yawed(0.0), OUT, 0.1)]
+    kinds = [g.label for g in shelf_grasps(apple, np.array([0.0, 0.0, apple.size[2] / 2]), _yawed(0.0), OUT, 0.1)]
     along = [k for k in kinds if k.endswith("-along")]
     across = [k for k in kinds if k.startswith("shelf-") and not k.endswith("-along")]
     assert along and across and kinds.index(along[-1]) < kinds.index(across[0])
@@ -374,9 +376,9 @@ def test_a_pitched_grasp_moves_aside_off_a_neighbour_in_front_at_the_palm_edge()
     position = np.array([0.0, 0.0, 0.47])
     neighbour = (footprint(milk, np.array([0.04, 0.113, 0.55]), _yawed(0.0)), 0.65)  # 4 cm out, 11 cm aside
     quat = _yawed(0.0)  # 11 cm deep, 7 cm along the front
-    grasps = [g for g in shelf_grasps(butter, position, quat, OUT, 0.1, [neighbour]) if g.kind.startswith("shelf-")]
-    aside = [g for g in grasps if g.kind.endswith("-aside")]
-    assert [g.kind for g in aside] == ["shelf-30-aside", "shelf-45-aside", "shelf-60-aside"]
+    grasps = [g for g in shelf_grasps(butter, position, quat, OUT, 0.1, [neighbour]) if g.label.startswith("shelf-")]
+    aside = [g for g in grasps if g.label.endswith("-aside")]
+    assert [g.label for g in aside] == ["shelf-30-aside", "shelf-45-aside", "shelf-60-aside"]
     for g in aside:
         moved = g.position[1]  # OUT is +x: along the front is y; away from the milk
         assert moved < -0.005
@@ -406,11 +408,12 @@ def test_raised_grasps_pass_over_a_low_neighbour_and_still_hold_the_top() -> Non
     grasps = top_grasps(charger, position, _yawed(0.0), np.array([-1.0, 0.0]))
     assert min(g.position[2] for g in grasps) - PAD_HALF == pytest.approx(SUPPORT_CLEARANCE)
     raised = raised_grasps(charger, position, grasps)
-    assert [g.kind for g in raised] == [f"{g.kind}-raised" for g in grasps]
+    assert [g.label for g in raised] == [f"{g.label}-raised" for g in grasps]
     for low, high in zip(grasps, raised, strict=True):
         assert high.position[:2] == pytest.approx(low.position[:2]) and np.array_equal(high.rotation, low.rotation)
         assert high.position[2] - PAD_HALF == pytest.approx(charger.size[2] - RAISED_HOLD)  # the pads' lower end
         assert high.position[2] - PAD_HALF > CATALOG["cd"].size[2] + 0.004  # over the CD
     assert raised_grasps(charger, position, raised) == []  # raised already
-    assert raised_grasps(charger, position, [replace(grasps[0], kind="rim")]) == []  # only grasps from above
+    rim = replace(grasps[0], kind=GraspKind(Family.RIM))
+    assert raised_grasps(charger, position, [rim]) == []  # only grasps from above
 

@@ -9,9 +9,10 @@ import mujoco
 import numpy as np
 import pytest
 
+from homer_sim.robot_spec import ROBOT
 from homer_sim.world import World
-from planners.control import Controller, cruise
-from planners.ik import JOINT_SPEEDS, IKError, IKSolver
+from planners.motion.control import Controller, cruise
+from planners.motion.ik import IKError, IKSolver
 from planners.robot import DEFAULT_POSE, PAD_GEOMS, ROBOT_XML, add_robot, robot_at
 
 DOWN = np.array([math.sqrt(0.5), 0.0, math.sqrt(0.5), 0.0])  # wxyz: grip x axis pointing down
@@ -138,7 +139,7 @@ def test_ik_step_is_mink_solve_ik_bit_for_bit(solver: IKSolver) -> None:
     rng = np.random.default_rng(0)
     home = solver.model.key("home").qpos.copy()
     solver.frame_task.set_target(mink.SE3.from_rotation_and_translation(mink.SO3(DOWN), np.array([0.7, 0.1, 0.8])))
-    limits = [solver.limits[0], mink.VelocityLimit(solver.model, JOINT_SPEEDS), solver.limits[2]]
+    limits = [solver.limits[0], mink.VelocityLimit(solver.model, dict(ROBOT.joint_speeds)), solver.limits[2]]
     for _ in range(20):
         q = np.clip(home + rng.uniform(-0.3, 0.3, size=home.shape), limits[0].lower + 1e-3, limits[0].upper - 1e-3)
         solver.configuration.update(q)

@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from homer_sim.world import World
-from planners.articulate import PartMotion, drawer_rim, edge_grasp, handle_grasp
-from planners.control import Controller
-from planners.door_skills import ClearanceCheck, Held
-from planners.grasps import matrix_to_quat
+from planners.grasps.geometry import matrix_to_quat
+from planners.motion.clearance import ClearanceCheck, Held
+from planners.motion.control import Controller
 from planners.robot import add_robot
 from planners.skills import Robot
+from planners.skills.parts import PartMotion, drawer_rim, edge_grasp, handle_grasp
 
 
 def _drift(world: World, before: np.ndarray, skip: tuple[str, ...] = ()) -> tuple[float, str]:

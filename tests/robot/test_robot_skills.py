@@ -7,7 +7,7 @@ import numpy as np
 from homer_sim.graph import INSIDE, ON, RELATION_NAMES
 from homer_sim.home.catalog import CATALOG
 from homer_sim.world import World
-from planners.motion import LEVEL_HAND, PASS_OVER
+from planners.motion.arm import LEVEL_HAND, PASS_OVER
 from planners.robot import add_robot
 from planners.skills import Robot
 
@@ -76,7 +76,7 @@ def test_unfold_check_sees_the_table_top_the_folded_elbow_swings_over() -> None:
         world = World(extras=[add_robot])
         robot = Robot(world)
         base = np.array([2.256, 1.549, yaw])
-        assert robot._unfold_clear(base, 0.26) == clear
+        assert robot.arm.unfold_clear(base, 0.26) == clear
         robot.navigator.drive_to(tuple(base), robot.tucked())
         raised = robot.raised(0.26)
         robot.controller.move_through([raised])
@@ -133,7 +133,7 @@ def test_a_box_held_from_the_side_is_carried_above_the_dining_table() -> None:
     assert opened.success, opened.reason
     picked = robot.pick("food_cereal")
     assert picked.success, picked.reason
-    robot._carry()
+    robot.arm.carry()
     hand = world.data.site("robot/grip").xmat.reshape(3, 3)[:, 0]
     assert np.linalg.norm(hand[:2]) > LEVEL_HAND, hand  # held level
     top = world.data.geom("table_dining_room/top")

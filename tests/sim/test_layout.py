@@ -11,7 +11,8 @@ from homer_sim.graph import INSIDE, ON
 from homer_sim.home.apartment import default_layout
 from homer_sim.home.floorplan import floor_plan
 from homer_sim.home.layout import Layout, ObjectDecl, Wall
-from homer_sim.home.validate import MIN_DOORWAY, ROBOT_RADIUS, validate_layout
+from homer_sim.home.validate import validate_layout
+from homer_sim.robot_spec import ROBOT
 
 
 def _with_objects(layout: Layout, *extra: ObjectDecl) -> Layout:
@@ -29,14 +30,14 @@ def test_default_layout_is_valid() -> None:
 def test_every_doorway_fits_the_robot() -> None:
     layout = default_layout()
     widths = [end - start for wall in layout.walls for start, end in wall.doorways]
-    assert len(widths) == 4 and min(widths) >= MIN_DOORWAY
+    assert len(widths) == 4 and min(widths) >= ROBOT.min_doorway
     plan = floor_plan(layout)
     for wall in layout.walls:  # the robot's disk passes through the middle of each doorway
         for start, end in wall.doorways:
             mid = (start + end) / 2
             (ax, ay), (bx, by) = wall.start, wall.end
             x, y = ax + (bx - ax) * mid / wall.length, ay + (by - ay) * mid / wall.length
-            assert plan.disk_is_free(x, y, ROBOT_RADIUS + 0.1), (wall.name, x, y)
+            assert plan.disk_is_free(x, y, ROBOT.footprint_radius + 0.1), (wall.name, x, y)
 
 
 @pytest.mark.parametrize(

@@ -5,16 +5,16 @@ from __future__ import annotations
 import numpy as np
 
 from homer_sim.home.catalog import CATALOG
-from planners.grasps import footprint
+from planners.grasps.geometry import footprint
 
 NEIGHBOUR_RADIUS = 0.4  # m between object centres beyond which a neighbour is not in a grasp's way
 LEVEL_OVERLAP = 0.02  # m of common height above which two objects stand on the same level
 
 
 def neighbour_footprints(world, name: str) -> list[tuple[np.ndarray, float]]:
-    """(footprint, top z m) (world xy points, m, each shape (n, 2); see `planners.grasps.footprint`) of the objects
-    within NEIGHBOUR_RADIUS of object `name` whose height range overlaps its own (they stand beside it on the
-    same shelf or surface), as they stand now."""
+    """(footprint, top z m) (world xy points, m, each shape (n, 2); see `planners.grasps.geometry.footprint`) of
+    the objects within NEIGHBOUR_RADIUS of object `name` whose height range overlaps its own (they stand beside it
+    on the same shelf or surface), as they stand now."""
     index = world.object_index(name)
     position = world.object_pose(name)[0]
     height = CATALOG[world.layout.objects[index].cls].size[2]

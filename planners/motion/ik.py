@@ -19,6 +19,7 @@ import mujoco
 import numpy as np
 
 from homer_sim.errors import HomerError
+from homer_sim.robot_spec import ROBOT, RobotSpec
 from planners.robot import (
     ARM_GEOMS,
     ARM_JOINTS,
@@ -28,12 +29,9 @@ from planners.robot import (
     GRIP_SITE,
     TORSO_JOINT,
     load_robot_spec,
+    spec_mismatches,
 )
 
-# Joint speed limits (rad/s or m/s), Fetch's published maxima; the base at Fetch's 1.0 m/s and ~1.7 rad/s.
-JOINT_SPEEDS = {"base_x": 1.0, "base_y": 1.0, "base_yaw": 1.7, "torso_lift": 0.1, "shoulder_pan": 1.256,
-                "shoulder_lift": 1.454, "upperarm_roll": 1.571, "elbow_flex": 1.521, "forearm_roll": 1.571,
-                "wrist_flex": 2.268, "wrist_roll": 2.268}
 POSITION_TOL = 0.005  # m
 ORIENTATION_TOL = np.deg2rad(2.0)  # rad
 SOLVER = "daqp"  # DAQP, called directly (see IKSolver._velocity)
@@ -64,13 +62,18 @@ class IKResult:
     reason: str = ""
 
 
-def robot_model() -> mujoco.MjModel:
-    """The robot-only model; robot geoms may collide with each other here so mink can keep the arm off the base."""
+def robot_model(robot: RobotSpec = ROBOT) -> mujoco.MjModel:
+    """The robot-only model; robot geoms may collide with each other here so mink can keep the arm off the base.
+    An IKError where the robot file disagrees with `robot` (see `planners.robot.spec_mismatches`)."""
     spec = load_robot_spec()
     for geom in spec.geoms:
         if geom.contype:
             geom.conaffinity = geom.conaffinity | geom.contype
-    return spec.compile()
+    model = spec.compile()
+    wrong = spec_mismatches(model, robot)
+    if wrong:
+        raise IKError(f"the robot file disagrees with its spec: {'; '.join(wrong)}")
+    return model
 
 
 class FixedLimit(mink.Limit):
@@ -89,11 +92,13 @@ class FixedLimit(mink.Limit):
 class IKSolver:
     """Differential IK on the robot-only model (its own MjData: IK never touches the live simulation).
 
-    dt: integration step of one IK iteration in s (bounds each step through the speed limits).
+    dt: integration step of one IK iteration in s (bounds each step through the speed limits); robot: the spec
+    whose joint speed limits bound the steps and whose numbers the robot file must agree with.
     """
 
-    def __init__(self, dt: float = 0.05, posture_cost: float = 1e-2) -> None:
-        self.model = robot_model()
+    def __init__(self, dt: float = 0.05, posture_cost: float = 1e-2, robot: RobotSpec = ROBOT) -> None:
+        self.robot = robot
+        self.model = robot_model(robot)
         self.dt = dt
         self.configuration = mink.Configuration(self.model)
         self.frame_task = mink.FrameTask(GRIP_SITE, "site", position_cost=1.0, orientation_cost=0.5,
@@ -103,7 +108,7 @@ class IKSolver:
         self.finger_qpos = np.array([self.model.joint(n).qposadr[0] for n in FINGER_JOINTS])
         self.limits = [
             mink.ConfigurationLimit(self.model),
-            FixedLimit(mink.VelocityLimit(self.model, JOINT_SPEEDS), self.configuration, dt),
+            FixedLimit(mink.VelocityLimit(self.model, dict(robot.joint_speeds)), self.configuration, dt),
             mink.CollisionAvoidanceLimit(self.model, [(list(ARM_GEOMS), list(BASE_GEOMS))],
                                          minimum_distance_from_collisions=0.02, collision_detection_distance=0.1),
         ]

@@ -13,8 +13,8 @@ from collections.abc import Callable, Sequence
 import mujoco
 import numpy as np
 
-from planners.ik import JOINT_SPEEDS
-from planners.robot import ACTUATORS, BODY_JOINTS, FINGER_JOINTS, GRIPPER_MAX, PREFIX
+from homer_sim.robot_spec import ROBOT, RobotSpec
+from planners.robot import ACTUATORS, BODY_JOINTS, FINGER_JOINTS, PREFIX
 
 CONTROL_STEPS = 5  # physics steps per control step (0.01 s at the apartment's 2 ms timestep)
 SPEED_FRACTION = 0.5  # planned peak joint speed as a fraction of the limit
@@ -45,9 +45,10 @@ def cruise(t: float, duration: float, ramp: float) -> float:
 
 
 class Controller:
-    """Position targets for the robot in a World with the robot attached under `prefix`."""
+    """Position targets for the robot in a World with the robot attached under `prefix`, within the joint speeds
+    and finger stroke of `robot`."""
 
-    def __init__(self, world, prefix: str = PREFIX) -> None:
+    def __init__(self, world, prefix: str = PREFIX, robot: RobotSpec = ROBOT) -> None:
         model = world.model
         self.world = world
         self.qpos_adr = np.array([model.joint(prefix + n).qposadr[0] for n in BODY_JOINTS + FINGER_JOINTS])
@@ -56,7 +57,8 @@ class Controller:
         gain = model.actuator_gainprm[self.actuator_ids, 0]
         # ctrl = target - offset: the base actuators are biased by their start pose (see planners.robot)
         self.ctrl_offset = model.actuator_biasprm[self.actuator_ids, 0] / gain
-        self.speeds = np.array([JOINT_SPEEDS[n] for n in BODY_JOINTS])
+        self.robot = robot
+        self.speeds = np.array([robot.joint_speed(n) for n in BODY_JOINTS])
         self.n_body = len(BODY_JOINTS)
         self.target = self.q()
         self.grip_target = float(np.mean(self.target[self.n_body:]))
@@ -70,7 +72,7 @@ class Controller:
         """Write targets: q_body shape (11,) or (13,) (base, torso, arm[, fingers]); grip: opening per finger, m."""
         self.target[: self.n_body] = q_body[: self.n_body]
         if grip is not None:
-            self.grip_target = min(max(float(grip), 0.0), GRIPPER_MAX)
+            self.grip_target = min(max(float(grip), 0.0), self.robot.finger_stroke)
         self._ctrl[: self.n_body] = self.target[: self.n_body]
         self._ctrl[self.n_body] = self.grip_target
         self.world.data.ctrl[self.actuator_ids] = self._ctrl - self.ctrl_offset
@@ -137,6 +139,6 @@ class Controller:
 
 
 def robot_geom_ids(model: mujoco.MjModel, prefix: str = PREFIX) -> np.ndarray:
-    """Ids of every geom on a robot body."""
-    names = [model.body(model.geom_bodyid[g]).name for g in range(model.ngeom)]
-    return np.array([g for g, n in enumerate(names) if n.startswith(prefix)], dtype=np.int32)
+    """Ids of every geom on a robot body (a body in the tree under the robot's base)."""
+    base = model.body(prefix + "base").id
+    return np.flatnonzero(model.body_rootid[model.geom_bodyid] == base).astype(np.int32)

@@ -18,10 +18,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 
-from planners.grasps import matrix_to_quat
+from homer_sim.graph import INSIDE
+from homer_sim.home.furniture import Furniture, furniture_geometry
+from homer_sim.home.spots import Spots
+from planners.grasps.geometry import axis_rotation, matrix_to_quat
 
 OPEN_TARGET = 0.96  # openness the opening motion aims for (success: above OPEN_OK)
 OPEN_OK = 0.9
@@ -38,9 +42,17 @@ EDGE_ABOVE_HANDLE = 0.15  # m: the edge is held this far above the handle
 PRE_OPENING = 0.03  # m per finger before closing on a 2 cm bar or panel
 MIN_HELD = 0.004  # m per finger: closed further means the fingers missed the 2 cm bar
 SLIP = 0.03  # m between the grip site and the grasp point on the part before a motion is aborted
-BASE_DISTANCES = (0.55, 0.65, 0.45, 0.75, 0.85)  # m from the grip site to the base centre, horizontally
-BASE_TURNS = np.radians([0, 15, -15, 30, -30, 45, -45, 60, -60, 75, -75])  # rad off the grasp's approach
 BASE_CLEARANCE = 0.05  # m between the base and the moving part
+
+
+class PartHold(Enum):
+    """Where the hand holds a door or drawer."""
+
+    HANDLE = "handle"  # the handle bar, from the front
+    EDGE = "edge"  # a hinge door's free vertical edge
+
+    def __str__(self) -> str:
+        return self.value
 
 
 @dataclass(frozen=True)
@@ -50,7 +62,7 @@ class PartGrasp:
 
     position: np.ndarray
     rotation: np.ndarray
-    kind: str
+    kind: PartHold
 
 
 def _frame(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -63,7 +75,7 @@ def handle_grasp(handle_local: np.ndarray, joint_type: str) -> PartGrasp:
     close along y; a drawer's bar is horizontal, so they close along z."""
     y = np.array([0.0, 1.0, 0.0]) if joint_type == "hinge" else np.array([0.0, 0.0, 1.0])
     position = np.asarray(handle_local, float) + np.array([HANDLE_OFFSET, 0.0, 0.0])
-    return PartGrasp(position, _frame(np.array([-1.0, 0.0, 0.0]), y), "handle")
+    return PartGrasp(position, _frame(np.array([-1.0, 0.0, 0.0]), y), PartHold.HANDLE)
 
 
 def edge_grasp(handle_local: np.ndarray, free_edge_y: float) -> PartGrasp:
@@ -71,13 +83,7 @@ def edge_grasp(handle_local: np.ndarray, free_edge_y: float) -> PartGrasp:
     handle: approach along the panel towards the hinge, fingers closing across the panel (along x)."""
     toward_hinge = -math.copysign(1.0, free_edge_y)
     position = np.array([0.0, free_edge_y + toward_hinge * EDGE_INSET, handle_local[2] + EDGE_ABOVE_HANDLE])
-    return PartGrasp(position, _frame(np.array([0.0, toward_hinge, 0.0]), np.array([1.0, 0.0, 0.0])), "edge")
-
-
-def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rotation matrix (3, 3) of `angle` rad about unit `axis` (Rodrigues)."""
-    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-    return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k @ k
+    return PartGrasp(position, _frame(np.array([0.0, toward_hinge, 0.0]), np.array([1.0, 0.0, 0.0])), PartHold.EDGE)
 
 
 class PartMotion:
@@ -140,29 +146,6 @@ def segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     return float(np.linalg.norm(p - (a + t * ab)))
 
 
-def base_candidates(grip_pos: np.ndarray, grip_rot: np.ndarray, previous_xy: np.ndarray | None,
-                    reach_in: np.ndarray | None = None) -> list[tuple[float, float, float]]:
-    """Base poses (x m, y m, yaw rad) behind a grip pose, facing it: nearest `previous_xy` first, or, without
-    one, straight behind the grasp first (BASE_TURNS, then BASE_DISTANCES order). "Behind" is against the grip
-    x's horizontal part, or against `reach_in` (a horizontal direction, shape (2,) or (3,)) where given."""
-    approach = grip_rot[:2, 0] if reach_in is None else np.asarray(reach_in, dtype=float)[:2]
-    norm = float(np.linalg.norm(approach))
-    if norm > 0.3 or previous_xy is None:
-        heading = math.atan2(approach[1], approach[0])
-    else:
-        heading = math.atan2(grip_pos[1] - previous_xy[1], grip_pos[0] - previous_xy[0])
-    poses = []
-    for turn in BASE_TURNS:
-        for distance in BASE_DISTANCES:
-            yaw = heading + float(turn)
-            xy = grip_pos[:2] - distance * np.array([math.cos(yaw), math.sin(yaw)])
-            poses.append((float(xy[0]), float(xy[1]), yaw))
-    if previous_xy is None:
-        return poses
-    return sorted(poses, key=lambda p: float(np.linalg.norm(np.array(p[:2]) - previous_xy)) + 0.2 * abs(
-        (p[2] - heading + math.pi) % (2 * math.pi) - math.pi))
-
-
 def drawer_rim(world, furniture: str, position: np.ndarray) -> float | None:
     """Height (m) of the top of the front of the drawer of `furniture` that holds the point `position` (m,
     shape (3,)) above its floor and below that top, or None where no drawer does. Something lifted out of a
@@ -178,3 +161,17 @@ def drawer_rim(world, furniture: str, position: np.ndarray) -> float | None:
         if abs(local[0]) <= half[0] and abs(local[1]) <= half[1] and 0.0 < local[2] and position[2] < rim:
             return rim
     return None
+
+
+def behind_a_door(furniture: Furniture) -> bool:
+    """Whether `furniture` keeps its shelves behind a hinged door (a cupboard, the fridge): what stands inside is
+    reached from the front, the hand held level or pitched down under the shelf above."""
+    return any(part.joint == "hinge" for part in furniture_geometry(furniture).parts)
+
+
+def shelves_inside(spots: Spots, furniture: Furniture | None, node: str, relation: int | None) -> list[int]:
+    """Indices of the shelves inside `furniture` (named `node`; None for a room) behind a door that a place with
+    `relation` goes to; none for furniture without a door."""
+    if furniture is None or not behind_a_door(furniture):
+        return []
+    return [k for k, p in spots.places_of(node, relation) if p.relation == INSIDE and p.part is None]

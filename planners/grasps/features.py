@@ -12,7 +12,7 @@ import numpy as np
 
 from homer_sim.home.catalog import ObjectClass
 from homer_sim.home.shapes import WALL_THICKNESS, handle_boxes
-from planners.grasps import (
+from planners.grasps.candidate import (
     FINGER_HALF_THICKNESS,
     GRIPPER_OPEN,
     MAX_WIDTH,
@@ -23,11 +23,11 @@ from planners.grasps import (
     TOP_DEPTH,
     TOP_MARGIN,
     TOP_NARROW_MARGIN,
+    Family,
     Grasp,
-    _box_extent,
-    _shelf_frame,
-    top_rotation,
+    GraspKind,
 )
+from planners.grasps.geometry import box_extent, shelf_frame, top_rotation
 
 HANDLE_APPROACH = 0.06  # m: the approach onto a handle from above (nothing else stands as high)
 RIM_DEPTH = 0.015  # m below the rim of the grip site of a rim pinch (a flared wall leans away lower down)
@@ -60,10 +60,10 @@ def handle_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray,
         centre = np.array([position[0], position[1], max(top - TOP_DEPTH, top - height + PAD_HALF + SUPPORT_CLEARANCE)])
         turns = ((0.0, width), (math.pi / 2, length)) if length <= MAX_WIDTH else ((0.0, width),)
         return [Grasp(centre, top_rotation(yaw + math.pi / 2 + turn), min(GRIPPER_OPEN, span / 2 + margin),
-                      f"handle{'-turned' if turn else ''}{suffix}", HANDLE_APPROACH)
-                for margin, suffix in ((TOP_MARGIN, ""), (TOP_NARROW_MARGIN, "-narrow")) for turn, span in turns]
-    out, across, _ = _shelf_frame(outward, quat)
-    span = _box_extent(across, length, width, yaw)  # the feature's extent along the front
+                      GraspKind(Family.HANDLE, turned=bool(turn), narrow=narrow), HANDLE_APPROACH)
+                for margin, narrow in ((TOP_MARGIN, False), (TOP_NARROW_MARGIN, True)) for turn, span in turns]
+    out, across, _ = shelf_frame(outward, quat)
+    span = box_extent(across, length, width, yaw)  # the feature's extent along the front
     if span > MAX_WIDTH:
         return []
     grasps = []
@@ -71,13 +71,13 @@ def handle_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray,
         x = math.cos(pitch) * -out + np.array([0.0, 0.0, -math.sin(pitch)])
         tip_drop = PAD_HALF * math.sin(pitch) + FINGER_HALF_THICKNESS * math.cos(pitch)
         z = max(top - TOP_DEPTH, top - height + tip_drop + SUPPORT_CLEARANCE)
+        kind = GraspKind(Family.HANDLE, pitch=round(math.degrees(pitch)))
         grasps.append(Grasp(np.array([position[0], position[1], z]), np.column_stack([x, across, np.cross(x, across)]),
-                            min(GRIPPER_OPEN, span / 2 + TOP_MARGIN), f"handle-{math.degrees(pitch):.0f}",
-                            SHELF_APPROACH))
+                            min(GRIPPER_OPEN, span / 2 + TOP_MARGIN), kind, SHELF_APPROACH))
     return grasps
 
 
-def _tilted_rims(hollow, position: np.ndarray, yaw: float, support: float, out: np.ndarray) -> list[Grasp]:
+def tilted_rims(hollow, position: np.ndarray, yaw: float, support: float, out: np.ndarray) -> list[Grasp]:
     """Pinches of a wide container's front rim from the compartment's front, pitched down SHELF_PITCHES (not
     horizontal), the fingers closing across the wall along the outward direction."""
     c, s = math.cos(yaw), math.sin(yaw)
@@ -92,11 +92,11 @@ def _tilted_rims(hollow, position: np.ndarray, yaw: float, support: float, out: 
         xy = centre + out[:2] * (hollow.rim_radius + 0.004)
         z = max(rim_z - 0.015, support + PAD_HALF + SUPPORT_CLEARANCE)
         grasps.append(Grasp(np.array([xy[0], xy[1], z]), np.column_stack([x, y, np.cross(x, y)]), 0.03,
-                            f"rim-{math.degrees(pitch):.0f}", SHELF_APPROACH))
+                            GraspKind(Family.RIM, pitch=round(math.degrees(pitch))), SHELF_APPROACH))
     return grasps
 
 
-def _rim_grasps(hollow, position: np.ndarray, yaw: float, support: float, robot_xy: np.ndarray) -> list[Grasp]:
+def rim_grasps(hollow, position: np.ndarray, yaw: float, support: float, robot_xy: np.ndarray) -> list[Grasp]:
     """Pinches of a container's wall at the rim, the fingers closing radially: the rim point nearest the robot
     at `robot_xy` first, then 30 degrees either side. A straight wall (a bin) is pinched RIM_DEEP at the rim
     point farthest from the robot instead: held at one point of its rim, the container's weight tilts it about
@@ -122,7 +122,7 @@ def _rim_grasps(hollow, position: np.ndarray, yaw: float, support: float, robot_
         angle = toward + delta + (math.pi if straight else 0.0)
         radial = np.array([math.cos(angle), math.sin(angle)])
         xy = centre + radial * (hollow.rim_radius + 0.004)
-        grasps.append(Grasp(np.array([xy[0], xy[1], z]), top_rotation(angle), 0.03, "rim", lift=lift,
+        grasps.append(Grasp(np.array([xy[0], xy[1], z]), top_rotation(angle), 0.03, GraspKind(Family.RIM), lift=lift,
                             hang=straight))
     return grasps
 
@@ -187,7 +187,7 @@ def pot_handle_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, 
             along = min(face + POT_HANDLE_GAP + PAD_HALF * math.cos(pitch), abs(centre[0]) + half[0])
             offset = body @ np.array([0.0, centre[1], centre[2]]) + h * along  # from the body centre
             opening = (half[2] if pitch == 0.0 else half[1]) + POT_HANDLE_MARGIN
-            grasps.append(Grasp(position + offset, np.column_stack([x, y, np.cross(x, y)]), opening,
-                                f"pot-handle-{math.degrees(pitch):.0f}", SHELF_APPROACH, lift=hang_lift(offset),
-                                hang=True))
+            kind = GraspKind(Family.POT_HANDLE, pitch=round(math.degrees(pitch)))
+            grasps.append(Grasp(position + offset, np.column_stack([x, y, np.cross(x, y)]), opening, kind,
+                                SHELF_APPROACH, lift=hang_lift(offset), hang=True))
     return grasps

@@ -6,7 +6,7 @@ the suite, not the robot: the apartment's settled start state, the doors or draw
 the object moved to its trial pose, the robot tucked in front of the furniture. From there on only physics
 moves anything. A trial succeeds when the object is at least MIN_LIFT m above its start, stays there for
 HOLD_SECONDS of physics, and slips less than MAX_SLIP m relative to the grip site meanwhile (no MuJoCo warning
-or NaN either). Classes that `planners.grasps.ungraspable_reason` rejects are listed as excluded, with that
+or NaN either). Classes that `planners.grasps.candidate.ungraspable_reason` rejects are listed as excluded, with that
 reason.
 
 mujoco and the planners that need it are imported inside the functions that run trials, so `homer --help`
@@ -65,7 +65,7 @@ class TrialResult:
 def suite_classes() -> tuple[dict[str, str], dict[str, str]]:
     """({class: the instance the suite picks}, {excluded class: reason}) over the apartment's movable objects,
     in layout order (the first instance of each class)."""
-    from planners.grasps import ungraspable_reason
+    from planners.grasps.candidate import ungraspable_reason
 
     included: dict[str, str] = {}
     excluded: dict[str, str] = {}
@@ -162,7 +162,7 @@ def _robot_in_front(world: World, name: str, rng: np.random.Generator) -> Robot:
     `name` where no pose in front is free)."""
     import mujoco
 
-    from planners.navigation import NavigationError
+    from planners.motion.navigation import NavigationError
     from planners.skills import Robot
 
     robot = Robot(world, rng)

@@ -1,32 +1,30 @@
-"""The robot's movement primitives, mixed into `planners.skills.Robot`, and `SkillResult`, what every skill returns.
+"""The arm's movement primitives (`Arm`), which the skills in `planners.skills` are built from.
 
-`Motion` owns how the robot moves: IK onto grip-site poses, straight grip-site lines, the tuck and the raised
-arm, joint-space swings checked for clearance, driving to furniture (with or without a held object) or to a base
-pose from which the way into a grasp is clear, the carry path; and what the hand holds (where an object sits in
-it, whether it is empty, whether an object has fallen over). The skills built on it are in `planners.pick`,
-`planners.place` and `planners.door_skills`; constants `planners.pick` and `planners.place` share live here.
+`Arm` owns how the robot moves: IK onto grip-site poses, straight grip-site lines, the tuck and the raised arm,
+joint-space swings checked for clearance, driving to furniture (with or without a held object) or to a base pose
+from which the way into a grasp is clear, the carry path; and what the hand holds (where an object sits in it,
+whether it is empty, whether an object has fallen over). Constants the pick and place skills share live here.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from homer_sim.home.catalog import CATALOG
-from homer_sim.home.validate import ROBOT_RADIUS
-from planners.articulate import base_candidates
-from planners.control import CARRY_MOTION, FREE_MOTION
-from planners.door_skills import ARC_BASE_COST, Held
-from planners.grasps import Grasp, matrix_to_quat, slerp
-from planners.navigation import CLEARANCE
+from planners.grasps.candidate import Grasp
+from planners.grasps.geometry import matrix_to_quat, slerp, yaw_matrix
+from planners.motion.clearance import ARC_BASE_COST, ClearanceCheck, Held
+from planners.motion.control import CARRY_MOTION, FREE_MOTION, Controller
+from planners.motion.ik import IKResult, IKSolver
+from planners.motion.navigation import CLEARANCE, Navigator, base_candidates
 
 MIN_HELD_OPENING = 0.001  # m per finger: closed further means the fingers missed
 GRASP_BASE_COST = 100.0  # IK damping on the base while grasping
 RAISED_TORSO = 0.3  # m
 CARRY_REACHES = (0.35, 0.45, 0.55)  # m from the base centre to the carry point, the nearest first (the farther ones
-# for a hand held level only, see `Motion._carry_path`)
+# for a hand held level only, see `Arm.carry_path`)
 LEVEL_HAND = 0.7  # horizontal part of the grip x axis above which the hand counts as held level
 CARRY_HEIGHT = 1.05  # m
 CARRY_STEP = 0.05  # m between IK waypoints on the way to the carry point
@@ -50,23 +48,32 @@ WAYPOINT_TOL = (0.015, np.deg2rad(5.0))  # m, rad: IK tolerance of a straight li
 # point is exact); tight ones stall near joint limits on the way
 
 
-@dataclass(frozen=True)
-class SkillResult:
-    """success, and when not, why (names the object, the place and the measured values)."""
+class Arm:
+    """The arm's movement primitives and what the hand holds, for the skills in `planners.skills`.
 
-    success: bool
-    reason: str = ""
+    Inputs, declared: the World, the IK solver, the controller that drives the robot in it, the navigator that
+    drives its base, and the clearance check of configurations against the apartment. State: `held` (the name of
+    the object in the hand, or None; the skills set it) and `folded` (the arm is in, or moving from, the tuck).
+    """
 
+    def __init__(self, world, ik: IKSolver, controller: Controller, navigator: Navigator,
+                 clearance: ClearanceCheck) -> None:
+        self.world = world
+        self.ik = ik
+        self.controller = controller
+        self.navigator = navigator
+        self.clearance = clearance
+        self.tuck = ik.model.key("home").qpos.copy()
+        self.shoulder_lift = ik.model.joint("shoulder_lift").qposadr[0]
+        self.held: str | None = None
+        self.folded = True
 
-class Motion:
-    """The movement primitives of `planners.skills.Robot` and what its hand holds; the state they use (world, ik,
-    controller, navigator, clearance, tuck, held, folded, shoulder_lift) is the Robot's (see `Robot.__init__`)."""
-
-    def _ik(self, position: np.ndarray, rotation_quat: np.ndarray, seeds: bool = True):
+    def solve(self, position: np.ndarray, rotation_quat: np.ndarray, seeds: bool = True) -> IKResult:
+        """IK onto a grip-site pose (m; wxyz) from the controller's target, the base damped as while grasping."""
         return self.ik.solve(self.controller.target, position, rotation_quat, base_cost=GRASP_BASE_COST,
                              seeds=seeds)
 
-    def _line(self, start: np.ndarray, end: np.ndarray, quat: np.ndarray, steps: int = 4,
+    def line(self, start: np.ndarray, end: np.ndarray, quat: np.ndarray, steps: int = 4,
               base_cost: float = GRASP_BASE_COST, loose_end: bool = False,
               partial: bool = False, seed: np.ndarray | None = None,
               from_quat: np.ndarray | None = None, exact: bool = False) -> list[np.ndarray] | None:
@@ -106,7 +113,7 @@ class Motion:
             opened = q_goal.copy()
             if grip is not None:
                 opened[self.controller.n_body:] = grip
-            via = [] if self._swing_clear(self.controller.target, opened) else [self.raised(q_goal[3])]
+            via = [] if self.swing_clear(self.controller.target, opened) else [self.raised(q_goal[3])]
             self.controller.move_through([*via, q_goal], grip=grip, **FREE_MOTION)
         else:
             self.controller.move_through([q_goal], grip=grip)
@@ -117,7 +124,7 @@ class Motion:
         touches nothing, quicker; else through `raised`."""
         if not self.folded:
             tucked = self.tucked()
-            if self.held is None and self._swing_clear(self.controller.target, tucked):
+            if self.held is None and self.swing_clear(self.controller.target, tucked):
                 self.controller.move_through([tucked], **FREE_MOTION)
             else:
                 self.controller.move_through([self.raised(self.controller.target[3]), tucked])
@@ -133,25 +140,25 @@ class Motion:
 
     def go_to(self, node: str, target_xy: np.ndarray, surface_z: float | None = None) -> bool:
         """Drive to a free base pose in front of furniture `node`, facing `target_xy`: with the arm tucked, or
-        while holding an object at the carry point (see `_carry_path`). A held object keeps clear of open doors,
+        while holding an object at the carry point (see `carry_path`). A held object keeps clear of open doors,
         and, if it hangs lower than PASS_OVER above `surface_z` (m, the surface it is for), of the furniture itself:
         then the robot stops short and returns True."""
         if self.folded:
             posture = self.tucked()
         else:
-            posture = self._carry()
+            posture = self.carry()
         reach, short = 0.0, False
         if self.held is not None:  # the held object sticks out past the base
             size = CATALOG[self.world.layout.objects[self.world.object_index(self.held)].cls].size
             body = self.world.object_body_ids[self.world.object_index(self.held)]
             position = self.world.object_pose(self.held)[0]
             half_height = float(np.abs(self.world.data.xmat[body].reshape(3, 3)[2]) @ np.asarray(size) / 2)
-            reach = self._held_reach()
+            reach = self.held_reach()
             short = surface_z is not None and position[2] - half_height < surface_z + PASS_OVER
             if short:  # the straight carry line stalled low: one IK solution lifts it clear, if there is one
                 grip = self.world.data.site("robot/grip").xpos
                 lift = surface_z + PASS_OVER + half_height - position[2]
-                higher = self._ik(grip + np.array([0.0, 0.0, lift + 0.02]), self._held_quat())
+                higher = self.solve(grip + np.array([0.0, 0.0, lift + 0.02]), self.grip_quat())
                 if higher.converged:
                     self.controller.move_through([higher.q])
                     posture = higher.q
@@ -161,7 +168,7 @@ class Motion:
                                 reach, **(FREE_MOTION if self.held is None else CARRY_MOTION))
         return short
 
-    def _go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float, here_first: bool = False,
+    def go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float, here_first: bool = False,
                      direct: bool = False) -> tuple[list[np.ndarray], float] | None:
         """Drive (arm tucked) to a free base pose from which the way into `grasp` is reachable with the arm
         clear of the apartment: the grip `entry` m out along `pull` (a horizontal unit vector out of the
@@ -171,33 +178,28 @@ class Motion:
         Base poses face the grasp along its approach, then, where the approach leans more than ASIDE_LEAN aside
         (see `rolled_grasps`), also into the furniture (against `pull`): beside it often no base pose is free.
         With `here_first`, where the robot stands is tried first; with `direct`, the arm may also swing straight
-        from the tuck (see `_way_in`)."""
+        from the tuck (see `way_in`)."""
         quat = grasp.quat()
         above = grasp.position - grasp.approach * grasp.rotation[:, 0]
         obstacles = self.navigator.open_part_rects()
         here = [tuple(self.controller.target[:3])] if here_first else []
-        lean = grasp.rotation[:2, 0]
-        aside = (np.linalg.norm(lean) > PITCHED_HAND and np.linalg.norm(pull) > 0.0
-                 and float(lean @ -pull[:2]) < math.cos(ASIDE_LEAN) * float(np.linalg.norm(lean)))
-        candidates = base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2])
-        if aside:  # then also those facing into the furniture
-            candidates += base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2], -pull)
+        candidates = self._grasp_bases(grasp, pull)
         lifts = (SIDE_LIFT, LOW_SIDE_LIFT) if np.linalg.norm(pull) > 0.0 else (SIDE_LIFT,)  # a shelf grasp's first leg
+        free = self.navigator.radius + CLEARANCE
         for base in [*here, *candidates]:
-            if base not in here and not self.navigator.plan.disk_is_free(base[0], base[1], ROBOT_RADIUS + CLEARANCE,
-                                                                         obstacles):
+            if base not in here and not self.navigator.plan.disk_is_free(base[0], base[1], free, obstacles):
                 continue
             q = self.tuck.copy()
             q[:3] = base
             start = self.ik.solve(q, above + entry * pull, quat, base_cost=ARC_BASE_COST)
             if not start.converged or not self.clearance.clear(start.q):
                 continue
-            path = self._checked_line(start.q, [above + entry * pull, above], quat)
-            lift = None if path is None else next((h for h in lifts if self._checked_line(
+            path = self.checked_line(start.q, [above + entry * pull, above], quat)
+            lift = None if path is None else next((h for h in lifts if self.checked_line(
                 path[-1], [above, grasp.position, grasp.position + np.array([0.0, 0.0, h])], quat) is not None), None)
             if lift is None:
                 continue
-            lead = self._way_in(base, start.q, above + entry * pull, quat, direct)
+            lead = self.way_in(base, start.q, above + entry * pull, quat, direct)
             if lead is None:
                 continue
             self.retract()
@@ -208,46 +210,58 @@ class Motion:
             return path_in, lift
         return None
 
-    def _way_in(self, base: np.ndarray, q: np.ndarray, point: np.ndarray, quat: np.ndarray, direct: bool = False
+    def _grasp_bases(self, grasp: Grasp, pull: np.ndarray) -> list[tuple[float, float, float]]:
+        """Base poses (x m, y m, yaw rad) to try for `grasp` (see `base_candidates`): facing it along its
+        approach, then, where the approach leans more than ASIDE_LEAN aside of the way into the furniture
+        (against `pull`, shape (3,)), also facing into the furniture."""
+        lean = grasp.rotation[:2, 0]
+        aside = (np.linalg.norm(lean) > PITCHED_HAND and np.linalg.norm(pull) > 0.0
+                 and float(lean @ -pull[:2]) < math.cos(ASIDE_LEAN) * float(np.linalg.norm(lean)))
+        candidates = base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2])
+        if aside:  # then also those facing into the furniture
+            candidates += base_candidates(grasp.position, grasp.rotation, self.controller.q()[:2], -pull)
+        return candidates
+
+    def way_in(self, base: np.ndarray, q: np.ndarray, point: np.ndarray, quat: np.ndarray, direct: bool = False
                 ) -> list[np.ndarray] | None:
         """The way from the tuck at base pose `base` (x m, y m, yaw rad) to configuration q (shape (13,), the grip
-        site at `point`, m, orientation `quat`): unfolded, then `_lead_in`; else, with `direct` (where unfolding
+        site at `point`, m, orientation `quat`): unfolded, then `lead_in`; else, with `direct` (where unfolding
         touches: close to a tall cupboard or its open door), straight from the tuck to q if that swing is clear
         (`reach` takes it); None if neither."""
-        if self._unfold_clear(base, q[3]):
-            lead = self._lead_in(q, point, quat)
+        if self.unfold_clear(base, q[3]):
+            lead = self.lead_in(q, point, quat)
             if lead is not None:
                 return lead
         if not direct:
             return None
         tucked = self.tucked()
         tucked[:3] = base
-        return [q] if self._swing_clear(tucked, q) else None
+        return [q] if self.swing_clear(tucked, q) else None
 
-    def _unfold_clear(self, base: np.ndarray, torso: float) -> bool:
+    def unfold_clear(self, base: np.ndarray, torso: float) -> bool:
         """Whether the arm unfolds from the tuck to `raised(torso)` at base pose `base` (x m, y m, yaw rad)
         without touching anything: next to a table the folded elbow swings out over its top."""
         tucked, raised = self.tucked(), self.raised(torso)
         tucked[:3] = raised[:3] = base
-        return self._swing_clear(tucked, raised)
+        return self.swing_clear(tucked, raised)
 
-    def _lead_in(self, q: np.ndarray, point: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
+    def lead_in(self, q: np.ndarray, point: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
         """The way from the raised arm to configuration q (shape (13,), the grip site at `point`, m): q alone if
         the joint-space swing there touches nothing, else down onto `point` from a LEAD_HEIGHTS m higher one
         (the swing passes over what stands on a table); None if neither is clear."""
-        if self._swing_clear(self.raised(q[3]), q):
+        if self.swing_clear(self.raised(q[3]), q):
             return [q]
         for height in LEAD_HEIGHTS:
             high = point + np.array([0.0, 0.0, height])
             via = self.ik.solve(q, high, quat, base_cost=ARC_BASE_COST, seeds=False)
-            if not via.converged or not self._swing_clear(self.raised(q[3]), via.q):
+            if not via.converged or not self.swing_clear(self.raised(q[3]), via.q):
                 continue
-            down = self._checked_line(via.q, [high, point], quat)
+            down = self.checked_line(via.q, [high, point], quat)
             if down is not None:
                 return [via.q, *down]
         return None
 
-    def _swing_clear(self, q_from: np.ndarray, q_to: np.ndarray, held: Held | None = None) -> bool:
+    def swing_clear(self, q_from: np.ndarray, q_to: np.ndarray, held: Held | None = None) -> bool:
         """Whether the joint-space move q_from -> q_to (each shape (13,), base at q_to's) keeps the arm, the
         fingers (they swing free) and `held`, an object in the hand, clear, checked every SWING_STEP rad of the
         largest joint change."""
@@ -257,7 +271,7 @@ class Motion:
         return all(self.clearance.clear(q_from + s * (q_to - q_from), held=held, fingers=True)
                    for s in np.linspace(0.0, 1.0, steps + 1)[1:])
 
-    def _checked_line(self, q: np.ndarray, points: list[np.ndarray], quat: np.ndarray, held: Held | None = None
+    def checked_line(self, q: np.ndarray, points: list[np.ndarray], quat: np.ndarray, held: Held | None = None
                       ) -> list[np.ndarray] | None:
         """IK configurations (base held, each shape (13,)) from q through grip-site points (m, each shape (3,)),
         ENTRY_STEP m apart on the straight lines between them; None if one is unreachable or touches anything
@@ -273,13 +287,13 @@ class Motion:
                 path.append(q)
         return path
 
-    def _carry(self) -> np.ndarray:
-        """Move the held object to the carry point along `_carry_path`; returns the posture there (shape (13,))."""
-        path = self._carry_path()
+    def carry(self) -> np.ndarray:
+        """Move the held object to the carry point along `carry_path`; returns the posture there (shape (13,))."""
+        path = self.carry_path()
         self.controller.move_through(path)
         return path[-1]
 
-    def _carry_path(self) -> list[np.ndarray]:
+    def carry_path(self) -> list[np.ndarray]:
         """Configurations (each shape (13,)) along a straight grip-site line from where the hand is to the carry
         point CARRY_REACHES[0] m in front of the base at CARRY_HEIGHT m, stopped at the last reachable point; a
         joint-space move there could swing the held object down through the furniture or out of the fingers. A
@@ -293,13 +307,13 @@ class Motion:
         rotation = self.world.data.site("robot/grip").xmat.reshape(3, 3)
         ahead = np.array([np.cos(yaw), np.sin(yaw)])
         if np.linalg.norm(rotation[:2, 0]) > PITCHED_HAND and rotation[:2, 0] @ ahead < 0.0:  # points back: turn it
-            rotation = _yaw_matrix(yaw - math.atan2(rotation[1, 0], rotation[0, 0])) @ rotation
+            rotation = yaw_matrix(yaw - math.atan2(rotation[1, 0], rotation[0, 0])) @ rotation
         level = np.linalg.norm(rotation[:2, 0]) > LEVEL_HAND
-        held = None if self.held is None else self._held(self.held)
+        held = None if self.held is None else self.held_object(self.held)
         best, height = [self.controller.target.copy()], -np.inf
         for k, reach in enumerate(CARRY_REACHES if level else CARRY_REACHES[:1]):
             point = np.array([x + reach * ahead[0], y + reach * ahead[1], CARRY_HEIGHT])
-            path = self._hand_line(point, matrix_to_quat(rotation), GRASP_BASE_COST, partial=True)
+            path = self.hand_line(point, matrix_to_quat(rotation), GRASP_BASE_COST, partial=True)
             end = self.ik.grip_pose(path[-1])[0][2] if path else -np.inf
             if end > height and (k == 0 or all(self.clearance.clear(q, held=held) for q in path)):
                 best, height = path, end
@@ -307,51 +321,51 @@ class Motion:
                 break
         return best
 
-    def _hand_line(self, point: np.ndarray, quat: np.ndarray, base_cost: float, partial: bool = False,
+    def hand_line(self, point: np.ndarray, quat: np.ndarray, base_cost: float, partial: bool = False,
                    seed: np.ndarray | None = None) -> list[np.ndarray] | None:
-        """`_line` from where the grip site is now (or at configuration `seed`, shape (13,)) to `point` (m) at
+        """`line` from where the grip site is now (or at configuration `seed`, shape (13,)) to `point` (m) at
         orientation `quat`, turning the hand evenly on the way: CARRY_STEP m and at most TURN_STEP rad between IK
         waypoints (at least two), every one within WAYPOINT_TOL: a move between poses, not onto a grasp."""
         if seed is None:
-            start, now = self.world.data.site("robot/grip").xpos.copy(), self._held_quat()
+            start, now = self.world.data.site("robot/grip").xpos.copy(), self.grip_quat()
         else:
             start, now = self.ik.grip_pose(seed)
         turn = 2.0 * math.acos(min(abs(float(np.dot(now, quat))), 1.0))
         steps = max(2, int(np.ceil(np.linalg.norm(point - start) / CARRY_STEP)), int(np.ceil(turn / TURN_STEP)))
-        return self._line(start, point, quat, steps, base_cost=base_cost, loose_end=True, partial=partial,
+        return self.line(start, point, quat, steps, base_cost=base_cost, loose_end=True, partial=partial,
                           seed=seed, from_quat=now)
 
-    def _grip_line(self, point: np.ndarray, quat: np.ndarray) -> bool:
-        """Move the grip site in a straight line to `point` (m), orientation `quat` kept (see `_hand_line`), the
+    def grip_line(self, point: np.ndarray, quat: np.ndarray) -> bool:
+        """Move the grip site in a straight line to `point` (m), orientation `quat` kept (see `hand_line`), the
         base free to follow; False (nothing moved) if the line leaves the arm's reach."""
-        path = self._hand_line(point, quat, PULL_BASE_COST)
+        path = self.hand_line(point, quat, PULL_BASE_COST)
         if path is None:
             return False
         self.controller.move_through(path)
         return True
 
     # --- the held object ---------------------------------------------------------------------------------
-    def _held_offset(self, name: str) -> np.ndarray:
+    def held_offset(self, name: str) -> np.ndarray:
         """Where object `name` sits in the grip site's frame (m, shape (3,)): it stays put while the hand turns,
         so a change of it is slip."""
         grip = self.world.data.site("robot/grip")
         return grip.xmat.reshape(3, 3).T @ (self.world.object_pose(name)[0] - grip.xpos)
 
-    def _hand_empty(self) -> bool:
+    def hand_empty(self) -> bool:
         """Whether the closed fingers hold nothing (they met each other)."""
         return float(np.mean(self.controller.q()[-2:])) < MIN_HELD_OPENING
 
-    def _held(self, name: str) -> Held:
+    def held_object(self, name: str) -> Held:
         """Object `name` as it sits in the hand now, for clearance checks of moves that carry it."""
         model, index = self.world.model, self.world.object_index(name)
         body = self.world.object_body_ids[index]
         grip = self.world.data.site("robot/grip")
         rotation = grip.xmat.reshape(3, 3)
         return Held(frozenset(np.flatnonzero(model.geom_bodyid == body).tolist()),
-                    int(model.jnt_qposadr[model.body_jntadr[body]]), self._held_offset(name),
+                    int(model.jnt_qposadr[model.body_jntadr[body]]), self.held_offset(name),
                     rotation.T @ self.world.data.xmat[body].reshape(3, 3))
 
-    def _held_reach(self) -> float:
+    def held_reach(self) -> float:
         """How far (m) the held object sticks out from the base centre, with CLEARANCE."""
         index = self.world.object_index(self.held)
         size = CATALOG[self.world.layout.objects[index].cls].size
@@ -359,16 +373,10 @@ class Motion:
         return float(np.linalg.norm(position[:2] - self.controller.q()[:2]) + np.linalg.norm(size[:2]) / 2
                      + CLEARANCE)
 
-    def _fallen_over(self, name: str) -> bool:
+    def fallen_over(self, name: str) -> bool:
         """Whether object `name` no longer stands up (its up axis tilted past UPRIGHT)."""
         return bool(self.world.data.xmat[self.world.object_body_ids[self.world.object_index(name)]][8] < UPRIGHT)
 
-    def _held_quat(self) -> np.ndarray:
+    def grip_quat(self) -> np.ndarray:
         """The grip site's current orientation (wxyz), kept while carrying."""
         return matrix_to_quat(self.world.data.site("robot/grip").xmat.reshape(3, 3))
-
-
-def _yaw_matrix(angle: float) -> np.ndarray:
-    """The rotation (shape (3, 3)) by `angle` rad about the vertical."""
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])

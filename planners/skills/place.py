@@ -2,7 +2,7 @@
 
 On an open top: lowered onto a free spot from above, let go, the hand drawn back. On a cabinet's shelf: carried
 in from a base pose where the object and the arm clear the cabinet, eased in slowly, let go and drawn straight
-out. Success is read back from the observed scene graph. Movement comes from `planners.motion`.
+out. Success is read back from the observed scene graph. Movement comes from `planners.motion.arm`.
 """
 
 from __future__ import annotations
@@ -13,13 +13,15 @@ import numpy as np
 
 from homer_sim.graph import INSIDE, RELATION_NAMES
 from homer_sim.home.catalog import CATALOG
-from homer_sim.home.validate import ROBOT_RADIUS
-from planners.articulate import base_candidates
-from planners.control import CARRY_MOTION
-from planners.door_skills import ARC_BASE_COST, Held
-from planners.grasps import matrix_to_quat
-from planners.motion import ENTRY_OUT, LEVEL_HAND, PASS_OVER, SIDE_LIFT, SkillResult, _yaw_matrix
-from planners.navigation import CLEARANCE, NavigationError
+from homer_sim.home.spots import Spots
+from homer_sim.observe import SceneGraphObserver
+from planners.grasps.geometry import matrix_to_quat, yaw_matrix
+from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, SIDE_LIFT, Arm
+from planners.motion.clearance import ARC_BASE_COST, Held
+from planners.motion.control import CARRY_MOTION
+from planners.motion.navigation import CLEARANCE, NavigationError, base_candidates
+from planners.skills.parts import shelves_inside
+from planners.skills.result import SkillResult
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 CARRY_SLIP = 0.03  # m the held object may shift in the hand while carried before a place gives up
@@ -30,56 +32,75 @@ RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to
 
 
 class Place:
-    """The `place` skill of `planners.skills.Robot` and its helpers (mixed into it; see `planners.motion.Motion`)."""
+    """The `place` skill: puts what the `arm` holds down, on or in furniture; `observer` reads where it ended,
+    `spots` (with `rng`) chooses where it goes."""
+
+    def __init__(self, arm: Arm, observer: SceneGraphObserver, spots: Spots, rng: np.random.Generator) -> None:
+        self.arm = arm
+        self.observer = observer
+        self.spots = spots
+        self.rng = rng
+        self.world, self.controller, self.navigator = arm.world, arm.controller, arm.navigator
+        self.ik, self.clearance = arm.ik, arm.clearance
 
     def place(self, node: str, relation: int | None = None) -> SkillResult:
         """Put the held object at a free spot ON or INSIDE furniture `node`, release it and retreat."""
-        name = self.held
+        name = self.arm.held
         if name is None:
             return SkillResult(False, "place: the robot holds nothing")
-        exclude = {self.world.object_index(name)}
-        shelves = self._shelves(node, relation)
+        shelves = shelves_inside(self.spots, self.navigator.furniture.get(node), node, relation)
         if shelves:
             return self._place_in_shelf(name, node, shelves)
         spot = None
         for k, _ in self.spots.places_of(node, relation):
-            spot = self.spots.free_spot(name, node, k, self.rng, exclude)
+            spot = self.spots.free_spot(name, node, k, self.rng, {self.world.object_index(name)})
             if spot is not None:
                 break
         if spot is None:
             return SkillResult(False, f"place: no free spot for {name} on {node}")
         target = np.array(spot.pos)
-        held_at = self._held_offset(name)  # where the object hangs in the hand (grip frame)
+        failure, short = self._carry_to(name, node, target)
+        return failure if failure is not None else self._lower_onto(name, node, target, short)
+
+    def _carry_to(self, name: str, node: str, target: np.ndarray) -> tuple[SkillResult | None, bool]:
+        """Carry `name` to a base pose in front of furniture `node` facing `target` (m, the spot it goes to; see
+        `Arm.go_to`): (a failure if it could not, or slipped more than CARRY_SLIP in the hand on the way or fell
+        out; whether the robot stopped short with the object low)."""
+        held_at = self.arm.held_offset(name)  # where the object hangs in the hand (grip frame)
         size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
         try:
-            short = self.go_to(node, target[:2], surface_z=target[2] - size[2] / 2)
+            short = self.arm.go_to(node, target[:2], surface_z=target[2] - size[2] / 2)
         except NavigationError as error:
-            return SkillResult(False, f"place: {error}")
-        slip = float(np.linalg.norm(self._held_offset(name) - held_at))
-        if slip > CARRY_SLIP and self._hand_empty():
-            self.held = None
-            return SkillResult(False, f"place: {name} fell out of the hand while carried")
+            return SkillResult(False, f"place: {error}"), False
+        slip = float(np.linalg.norm(self.arm.held_offset(name) - held_at))
+        if slip > CARRY_SLIP and self.arm.hand_empty():
+            self.arm.held = None
+            return SkillResult(False, f"place: {name} fell out of the hand while carried"), short
         if slip > CARRY_SLIP:  # still in the hand: the caller decides where it goes down
-            return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand while carried")
+            return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand while carried"), short
+        return None, short
+
+    def _lower_onto(self, name: str, node: str, target: np.ndarray, short: bool) -> SkillResult:
+        """Lower the held `name` onto `target` (m) on furniture `node` from APPROACH m above, as it hangs in the
+        hand, let go and retreat. Stopped `short` with the object low: first lift it over the surface, then drive
+        in close (the object passes over the edge) and move it across to above the spot in a straight line."""
         grip = self.world.data.site("robot/grip")
         offset = grip.xpos - self.world.object_pose(name)[0]  # keep the object where it hangs now
-        quat = self._held_quat()
+        quat = self.arm.grip_quat()
         release = target + offset + np.array([0.0, 0.0, 0.01])
         above = release + np.array([0.0, 0.0, APPROACH])
-        # Stopped short with the object low: lift it over the surface, then drive in close (the object passes
-        # over the edge) and move it across to above the spot in a straight line.
-        if short and self._grip_line(np.array([*grip.xpos[:2], max(grip.xpos[2], release[2] + PASS_OVER)]), quat):
+        if short and self.arm.grip_line(np.array([*grip.xpos[:2], max(grip.xpos[2], release[2] + PASS_OVER)]), quat):
             try:
                 self.navigator.drive_to(self.navigator.stand_pose(node, tuple(target[:2])),
                                         self.controller.target.copy(), **CARRY_MOTION)
             except NavigationError:
                 pass  # reach from where it stands
-        if not self._grip_line(above, quat):
-            pre = self._ik(above, quat)
+        if not self.arm.grip_line(above, quat):
+            pre = self.arm.solve(above, quat)
             if not pre.converged:
                 return SkillResult(False, f"place: {name} above {node} is {pre.reason}")
-            self.reach(pre.q)
-        down = self._line(above, release, quat)
+            self.arm.reach(pre.q)
+        down = self.arm.line(above, release, quat)
         if down is None:
             return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
         self.controller.move_through(down)
@@ -93,36 +114,29 @@ class Place:
         over)."""
         x = self.world.data.site("robot/grip").xmat.reshape(3, 3)[:, 0].copy()
         back = release - APPROACH * x
-        away = self._line(release, back, quat)
+        away = self.arm.line(release, back, quat)
         if away is None or np.linalg.norm(x[:2]) <= LEVEL_HAND:
             return away
-        return away + (self._line(back, back + np.array([0.0, 0.0, APPROACH]), quat, seed=away[-1]) or [])
+        return away + (self.arm.line(back, back + np.array([0.0, 0.0, APPROACH]), quat, seed=away[-1]) or [])
 
     def _let_go(self, name: str, node: str, opening: float, away: list[np.ndarray] | None,
                 inside: bool = False) -> SkillResult:
         """Open the fingers to `opening` m per finger, move the hand along `away` (configurations, if any), tuck,
         let the world settle, and read where `name` ended: on or in `node` (inside it, with `inside`)."""
         self.controller.set_grip(opening, seconds=0.4)
-        self.held = None
+        self.arm.held = None
         if away is not None:
             self.controller.move_through(away)
-        self.retract()
+        self.arm.retract()
         self.world.settle(max_seconds=2.0)
         graph = self.observer.update()
         parent, relation = graph.parent_of(name), graph.relation_of(name)
         if parent != node or (inside and relation != RELATION_NAMES[INSIDE]):
             return SkillResult(False, f"place: {name} ended {relation} {parent}, not {'inside' if inside else 'on'} "
                                       f"{node}")
-        if self._fallen_over(name):
+        if self.arm.fallen_over(name):
             return SkillResult(False, f"place: {name} fell over on {node}")
         return SkillResult(True)
-
-    def _shelves(self, node: str, relation: int | None) -> list[int]:
-        """Indices of the shelves inside cabinet `node` that a place with `relation` goes to (none elsewhere)."""
-        furniture = self.navigator.furniture.get(node)
-        if furniture is None or furniture.kind != "cabinet":
-            return []
-        return [k for k, p in self.spots.places_of(node, relation) if p.relation == INSIDE and p.part is None]
 
     def _place_in_shelf(self, name: str, node: str, places: list[int]) -> SkillResult:
         """Put the held object on a shelf inside cabinet `node` (`places`: its shelf indices), the reverse of
@@ -138,16 +152,8 @@ class Place:
                         SHELF_SPOTS)
         if not spots:
             return SkillResult(False, f"place: no free spot for {name} inside {node}")
-        posture, held = self._carry(), self._held(name)
-        grip = self.world.data.site("robot/grip")
-        now = grip.xmat.reshape(3, 3)
-        # turned about the vertical: a hand held level points into the shelf; one pointing down keeps its turn
-        # relative to the base, the base facing the shelf
-        level = np.linalg.norm(now[:2, 0]) > LEVEL_HAND
-        turn = math.atan2(-out[1], -out[0]) - (math.atan2(now[1, 0], now[0, 0]) if level else
-                                               self.controller.target[2])
-        rotation = _yaw_matrix(turn) @ now
-        quat = matrix_to_quat(rotation)
+        posture, held = self.arm.carry(), self.arm.held_object(name)
+        rotation = self._into_shelf(out)
         up, pull = np.array([0.0, 0.0, 1.0]), np.array([out[0], out[1], 0.0])
         clear_out = np.linalg.norm(size) / 2 + ENTRY_OUT  # the object's centre this far out of the front: all out
         for spot in spots:
@@ -157,37 +163,56 @@ class Place:
             planned = self._drive_for(points, rotation, posture, held)
             if planned is None:
                 continue
-            ease, path_in = planned
-            self._ease_to(ease, path_in[0])
-            if self._hand_empty():
-                self.held = None
-                self.retract()
-                return SkillResult(False, f"place: {name} fell out of the hand on the way into {node}")
-            now = self._held(name)  # the object may have turned in the fingers on the way: aim it again
-            again = np.array(spot.pos) + np.array([0.0, 0.0, 0.01]) - rotation @ now.position
-            replanned = self._checked_line(self.controller.target, [points[0], again + SIDE_LIFT * up, again],
-                                           quat, now)
-            slip = float(np.linalg.norm(now.position - held.position))
-            if replanned is not None:
-                path_in, release = [self.controller.target.copy(), *replanned], again
-            elif slip > CARRY_SLIP:  # still held, but no longer as planned: the caller puts it down elsewhere
-                return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand on the way into "
-                                          f"{node} and no longer goes in clear")
-            self.controller.move_through(path_in[1:])
-            self.controller.settle(0.003)
-            return self._let_go(name, node, float(np.mean(self.controller.q()[-2:])) + RELEASE_OPENING,
-                                self._line(release, outside, quat, steps=4, loose_end=True), inside=True)
+            return self._go_in(name, node, np.array(spot.pos), rotation, held, planned, release, outside)
         return SkillResult(False, f"place: no free base pose puts {name} into {node} without it or the arm "
                                   f"touching {node} or its contents ({len(spots)} spots tried)")
+
+    def _go_in(self, name: str, node: str, spot: np.ndarray, rotation: np.ndarray, held: Held,
+               planned: tuple[list[np.ndarray], list[np.ndarray]], release: np.ndarray, outside: np.ndarray
+               ) -> SkillResult:
+        """Carry `held` (`name`) into cabinet `node` along `planned` (from `_drive_for`) and let it go on the
+        shelf at `spot` (m): eased in, aimed again where it turned in the fingers on the way (the grip site at
+        `release`, m, as planned, at `rotation`), down, released and drawn straight out to `outside` (m)."""
+        quat, up = matrix_to_quat(rotation), np.array([0.0, 0.0, 1.0])
+        ease, path_in = planned
+        self._ease_to(ease, path_in[0])
+        if self.arm.hand_empty():
+            self.arm.held = None
+            self.arm.retract()
+            return SkillResult(False, f"place: {name} fell out of the hand on the way into {node}")
+        now = self.arm.held_object(name)  # the object may have turned in the fingers on the way: aim it again
+        again = spot + np.array([0.0, 0.0, 0.01]) - rotation @ now.position
+        entry = outside + SIDE_LIFT * up
+        replanned = self.arm.checked_line(self.controller.target, [entry, again + SIDE_LIFT * up, again], quat, now)
+        slip = float(np.linalg.norm(now.position - held.position))
+        if replanned is not None:
+            path_in, release = [self.controller.target.copy(), *replanned], again
+        elif slip > CARRY_SLIP:  # still held, but no longer as planned: the caller puts it down elsewhere
+            return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand on the way into "
+                                      f"{node} and no longer goes in clear")
+        self.controller.move_through(path_in[1:])
+        self.controller.settle(0.003)
+        return self._let_go(name, node, float(np.mean(self.controller.q()[-2:])) + RELEASE_OPENING,
+                            self.arm.line(release, outside, quat, steps=4, loose_end=True), inside=True)
+
+    def _into_shelf(self, out: np.ndarray) -> np.ndarray:
+        """The grip rotation (shape (3, 3)) that carries the held object into a shelf whose front faces `out`
+        (shape (2,)): the hand's now, turned about the vertical; a hand held level then points into the shelf,
+        one pointing down keeps its turn relative to the base, the base facing the shelf."""
+        now = self.world.data.site("robot/grip").xmat.reshape(3, 3)
+        level = np.linalg.norm(now[:2, 0]) > LEVEL_HAND
+        turn = math.atan2(-out[1], -out[0]) - (math.atan2(now[1, 0], now[0, 0]) if level else
+                                               self.controller.target[2])
+        return yaw_matrix(turn) @ now
 
     def _ease_path(self, q_from: np.ndarray, q_to: np.ndarray, held: Held) -> list[np.ndarray] | None:
         """The way (configurations, each shape (13,)) of a held object from configuration q_from to q_to: along a
         straight grip line as far as it is reachable, the rest in joint space; None if any of it touches anything.
         """
-        lead = self._hand_line(*self.ik.grip_pose(q_to), ARC_BASE_COST, partial=True, seed=q_from) or []
+        lead = self.arm.hand_line(*self.ik.grip_pose(q_to), ARC_BASE_COST, partial=True, seed=q_from) or []
         if not all(self.clearance.clear(q, held=held) for q in lead):
             return None
-        return lead if self._swing_clear(lead[-1] if lead else q_from, q_to, held) else None
+        return lead if self.arm.swing_clear(lead[-1] if lead else q_from, q_to, held) else None
 
     def _ease_to(self, lead: list[np.ndarray], q: np.ndarray) -> None:
         """Move a held object through `lead` (from `_ease_path`), then to configuration q (shape (13,)) in joint
@@ -205,17 +230,18 @@ class Place:
         `_ease_path`; the configurations along `points`), each configuration shape (13,), or None (the robot
         stays)."""
         quat = matrix_to_quat(rotation)
-        reach = self._held_reach()
+        reach = self.arm.held_reach()
         obstacles = self.navigator.open_part_rects()
         for base in base_candidates(points[-1], rotation, self.controller.q()[:2]):
-            if not self.navigator.plan.disk_is_free(base[0], base[1], ROBOT_RADIUS + CLEARANCE, obstacles):
+            free = self.navigator.radius + CLEARANCE
+            if not self.navigator.plan.disk_is_free(base[0], base[1], free, obstacles):
                 continue
             q = posture.copy()
             q[:3] = base
             start = self.ik.solve(q, points[0], quat, base_cost=ARC_BASE_COST)
             if not start.converged or not self.clearance.clear(start.q, held=held):
                 continue
-            path = self._checked_line(start.q, points, quat, held)
+            path = self.arm.checked_line(start.q, points, quat, held)
             if path is None:
                 continue
             carried = posture.copy()

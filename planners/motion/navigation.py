@@ -15,8 +15,9 @@ from homer_sim.errors import HomerError
 from homer_sim.home.floorplan import find_path, floor_plan, inflate, path_length
 from homer_sim.home.furniture import local_to_world
 from homer_sim.home.placement import base_height
-from homer_sim.home.validate import ROBOT_RADIUS, access_sides
-from planners.control import SPEED_FRACTION, Controller
+from homer_sim.home.validate import access_sides
+from homer_sim.robot_spec import ROBOT, RobotSpec
+from planners.motion.control import SPEED_FRACTION, Controller
 
 STAND_DISTANCES = np.arange(0.34, 0.81, 0.02)  # m from the furniture's front face to the base centre
 STAND_OFFSETS = np.array([0.0, 0.05, -0.05, 0.1, -0.1, 0.15, -0.15, 0.2, -0.2, 0.3, -0.3, 0.4, -0.4, 0.5,
@@ -24,7 +25,9 @@ STAND_OFFSETS = np.array([0.0, 0.05, -0.05, 0.1, -0.1, 0.15, -0.15, 0.2, -0.2, 0
 NEAR_DISTANCES = (0.5, 0.6, 0.7)  # m from an object on the floor to the base centre
 NEAR_TURNS = np.radians(np.arange(0, 360, 30))  # rad around an object on the floor, from the robot's side
 WAYPOINT_STRIDE = 4  # keep every 4th grid cell of a path
-CLEARANCE = 0.02  # m beyond ROBOT_RADIUS
+CLEARANCE = 0.02  # m beyond the robot's footprint radius
+BASE_DISTANCES = (0.55, 0.65, 0.45, 0.75, 0.85)  # m from the grip site to the base centre, horizontally
+BASE_TURNS = np.radians([0, 15, -15, 30, -30, 45, -45, 60, -60, 75, -75])  # rad off the grasp's approach
 
 
 class NavigationError(HomerError):
@@ -32,15 +35,17 @@ class NavigationError(HomerError):
 
 
 class Navigator:
-    """Base poses and base motion in one World; `controller` drives the robot."""
+    """Base poses and base motion in one World for a base of `robot`'s footprint; `controller` drives the robot."""
 
-    def __init__(self, world, controller: Controller) -> None:
+    def __init__(self, world, controller: Controller, robot: RobotSpec = ROBOT) -> None:
         self.world = world
+        self.robot = robot
+        self.radius = robot.footprint_radius  # m kept free around the base centre
         self.controller = controller
         self.layout = world.layout
         self.furniture = self.layout.furniture_by_name()
         self.plan = floor_plan(self.layout)
-        self.blocked = inflate(self.plan, ROBOT_RADIUS + CLEARANCE)
+        self.blocked = inflate(self.plan, self.radius + CLEARANCE)
         model = world.model
         self.part_geoms = {name: [g for g in range(model.ngeom) if model.geom_bodyid[g] == model.body(name).id]
                            for name in world.articulations}
@@ -81,7 +86,7 @@ class Navigator:
             for offset in STAND_OFFSETS:
                 for distance in STAND_DISTANCES[STAND_DISTANCES >= min(reach, STAND_DISTANCES[-1])]:
                     xy = front + tangent * (along + offset) + normal * distance
-                    if self.plan.disk_is_free(float(xy[0]), float(xy[1]), ROBOT_RADIUS, obstacles):
+                    if self.plan.disk_is_free(float(xy[0]), float(xy[1]), self.radius, obstacles):
                         return float(xy[0]), float(xy[1]), math.atan2(-normal[1], -normal[0])
         raise NavigationError(f"no free base pose in front of {node} near {np.round(target_xy, 2).tolist()}")
 
@@ -96,7 +101,7 @@ class Navigator:
             for distance in NEAR_DISTANCES:
                 angle = toward_here + float(turn)
                 xy = target + distance * np.array([math.cos(angle), math.sin(angle)])
-                if self.plan.disk_is_free(float(xy[0]), float(xy[1]), ROBOT_RADIUS + CLEARANCE, obstacles):
+                if self.plan.disk_is_free(float(xy[0]), float(xy[1]), self.radius + CLEARANCE, obstacles):
                     return float(xy[0]), float(xy[1]), angle + math.pi
         raise NavigationError(f"no free base pose near {np.round(target, 2).tolist()} on the floor")
 
@@ -106,12 +111,12 @@ class Navigator:
         normal = local_to_world(f, np.array([[1.0, 0.0, 0.0]])) - local_to_world(f, np.zeros((1, 3)))
         return normal[0, :2] / np.linalg.norm(normal[0, :2])
 
-    def path_to(self, goal: tuple[float, float, float], reach: float = ROBOT_RADIUS) -> list[tuple[float, float]]:
+    def path_to(self, goal: tuple[float, float, float], reach: float = 0.0) -> list[tuple[float, float]]:
         """Waypoints (x, y) in m from the base's current position to `goal`, keeping `reach` m (the base, or a
         carried object held out in front, whichever sticks out further) from open doors and drawers."""
         start = tuple(self.controller.q()[:2])
         extra = np.zeros_like(self.blocked)
-        reach = max(reach, ROBOT_RADIUS)
+        reach = max(reach, self.radius)
         for rect in self.open_part_rects():
             grown = (rect[0] - reach, rect[1] - reach, rect[2] + reach, rect[3] + reach)
             i0, j0 = self.plan.cell(grown[0], grown[1])
@@ -122,7 +127,7 @@ class Navigator:
             raise NavigationError(f"no path from {np.round(start, 2).tolist()} to {np.round(goal[:2], 2).tolist()}")
         return path
 
-    def drive_to(self, goal: tuple[float, float, float], tuck: np.ndarray, reach: float = ROBOT_RADIUS,
+    def drive_to(self, goal: tuple[float, float, float], tuck: np.ndarray, reach: float = 0.0,
                  speed: float = SPEED_FRACTION, ramp: float | None = None) -> float:
         """Drive the base to `goal` (x m, y m, yaw rad) with the torso and arm at `tuck` (shape (13,)), keeping
         `reach` m from open doors (see `path_to`), every joint's peak speed at `speed` of its limit (cruising with
@@ -144,6 +149,29 @@ class Navigator:
         self.controller.move_through(waypoints, speed=speed, ramp=ramp)
         self.controller.settle(0.005, max_seconds=2.0)
         return path_length(path)
+
+
+def base_candidates(grip_pos: np.ndarray, grip_rot: np.ndarray, previous_xy: np.ndarray | None,
+                    reach_in: np.ndarray | None = None) -> list[tuple[float, float, float]]:
+    """Base poses (x m, y m, yaw rad) behind a grip pose, facing it: nearest `previous_xy` first, or, without
+    one, straight behind the grasp first (BASE_TURNS, then BASE_DISTANCES order). "Behind" is against the grip
+    x's horizontal part, or against `reach_in` (a horizontal direction, shape (2,) or (3,)) where given."""
+    approach = grip_rot[:2, 0] if reach_in is None else np.asarray(reach_in, dtype=float)[:2]
+    norm = float(np.linalg.norm(approach))
+    if norm > 0.3 or previous_xy is None:
+        heading = math.atan2(approach[1], approach[0])
+    else:
+        heading = math.atan2(grip_pos[1] - previous_xy[1], grip_pos[0] - previous_xy[0])
+    poses = []
+    for turn in BASE_TURNS:
+        for distance in BASE_DISTANCES:
+            yaw = heading + float(turn)
+            xy = grip_pos[:2] - distance * np.array([math.cos(yaw), math.sin(yaw)])
+            poses.append((float(xy[0]), float(xy[1]), yaw))
+    if previous_xy is None:
+        return poses
+    return sorted(poses, key=lambda p: float(np.linalg.norm(np.array(p[:2]) - previous_xy)) + 0.2 * abs(
+        (p[2] - heading + math.pi) % (2 * math.pi) - math.pi))
 
 
 def base_z(layout, node: str) -> float:

@@ -2,7 +2,7 @@
 
 From above (top grasps, off-centre ones, out of a drawer past its front), or from a cabinet's shelf or under a
 low shelf from the front (shelf grasps, the object lifted, drawn out, then raised); a failed grasp is retried
-from the next candidate. Movement comes from `planners.motion`.
+from the next candidate. Movement comes from `planners.motion.arm`.
 """
 
 from __future__ import annotations
@@ -15,20 +15,32 @@ import numpy as np
 from homer_sim.graph import INSIDE, ON, RELATION_NAMES
 from homer_sim.home.catalog import CATALOG
 from homer_sim.home.placement import place_world
-from planners.articulate import drawer_rim
-from planners.container_grasps import hang_rotation
-from planners.control import FREE_MOTION
-from planners.grasps import Grasp, disturbed, matrix_to_quat, ungraspable_reason
-from planners.motion import ENTRY_OUT, GRASP_BASE_COST, MIN_HELD_OPENING, PULL_BASE_COST, SIDE_LIFT, SkillResult
-from planners.navigation import NavigationError
-from planners.neighbours import neighbour_footprints
-from planners.shelf_grasps import shelf_grasps
-from planners.top_grasps import offset_grasps, raised_grasps, rim_approach, squared_grasps, top_grasps
+from homer_sim.home.spots import Spots
+from homer_sim.observe import SceneGraphObserver
+from planners.grasps.above import offset_grasps, raised_grasps, rim_approach, squared_grasps, top_grasps
+from planners.grasps.candidate import Grasp, disturbed, ungraspable_reason
+from planners.grasps.features import hang_rotation
+from planners.grasps.geometry import matrix_to_quat
+from planners.grasps.neighbours import neighbour_footprints
+from planners.grasps.ranking import rank_from_above
+from planners.grasps.shelf import shelf_grasps
+from planners.motion.arm import (
+    ENTRY_OUT,
+    GRASP_BASE_COST,
+    MIN_HELD_OPENING,
+    PULL_BASE_COST,
+    SIDE_LIFT,
+    Arm,
+)
+from planners.motion.control import FREE_MOTION
+from planners.motion.navigation import NavigationError
+from planners.skills.parts import behind_a_door, drawer_rim, shelves_inside
+from planners.skills.result import SkillResult
 
 LIFT = 0.15  # m
 DRAWER_CLEARANCE = 0.03  # m an object lifted out of a drawer rises past the top of its front
 HOLD_SECONDS = 0.5
-# a side grasp lifts the object SIDE_LIFT m off its shelf (see planners.motion),
+# a side grasp lifts the object SIDE_LIFT m off its shelf (see planners.motion.arm),
 SIDE_PULL = 0.35  # m: then draws it this far out of the furniture,
 SIDE_RAISE = 0.13  # m: then raises it this much more
 OPEN_ABOVE = 0.5  # m of free height above a place below which a grasp from above does not fit
@@ -37,7 +49,15 @@ DESCENT_DRIFT = 0.005  # m a loose waypoint of the descent onto a grasp may stra
 
 
 class Pick:
-    """The `pick` skill of `planners.skills.Robot` and its helpers (mixed into it; see `planners.motion.Motion`)."""
+    """The `pick` skill: grasps an object with the `arm` and lifts it; `observer` reads where the object stands,
+    `spots` the furniture's places."""
+
+    def __init__(self, arm: Arm, observer: SceneGraphObserver, spots: Spots) -> None:
+        self.arm = arm
+        self.observer = observer
+        self.spots = spots
+        self.world, self.controller, self.navigator = arm.world, arm.controller, arm.navigator
+        self.ik, self.clearance = arm.ik, arm.clearance
 
     def pick(self, name: str, node: str | None = None, into: str | None = None) -> SkillResult:
         """Grasp object `name` and lift it LIFT m; `node` (the furniture it is on or in) is where to stand.
@@ -48,69 +68,96 @@ class Pick:
         reason = ungraspable_reason(cls)
         if reason is not None:
             return SkillResult(False, f"{name}: not graspable ({reason})")
-        if self._fallen_over(name):  # every grasp here is for an object standing up
+        if self.arm.fallen_over(name):  # every grasp here is for an object standing up
             return SkillResult(False, f"{name}: it has fallen over (lies on its side), and no grasp fits it so")
         graph = self.observer.update()
         node = node or graph.parent_of(name)
         position, quat = self.world.object_pose(name)
         furniture = self.navigator.furniture.get(node)
         inside = graph.relation_of(name) == RELATION_NAMES[INSIDE] and furniture is not None
-        if (inside and furniture.kind == "cabinet") or self._under_a_shelf(node, position, cls.size[2]):
+        if (inside and behind_a_door(furniture)) or self._under_a_shelf(node, position, cls.size[2]):
             return self._pick_from_shelf(name, node, cls, position, quat)  # from the front, the base placed per grasp
-        side_failures: list[str] = []
-        if into is not None and furniture is not None and self._shelves(into, None):
-            try:  # from the side nearest where the robot would stand
+        failures: list[str] = []
+        if into is not None and furniture is not None and shelves_inside(self.spots, self.navigator.furniture.get(
+                into), into, None):  # from the side nearest where the robot would stand
+            try:
                 stand = np.array(self.navigator.stand_pose(node, tuple(position[:2]))[:2])
             except NavigationError as error:
                 return SkillResult(False, f"{name}: {error}")
-            toward = (stand - position[:2]) / max(float(np.linalg.norm(stand - position[:2])), 1e-9)
-            yaw = 2.0 * math.atan2(quat[3], quat[0])
-            axes = [np.array([math.cos(yaw + a), math.sin(yaw + a)]) for a in np.arange(4) * math.pi / 2]
-            for out in sorted(axes, key=lambda a: -float(a @ toward)):  # the object's sides, nearest side first
-                if out @ toward > -0.5:
-                    outcome = self._pick_from_shelf(name, node, cls, position, quat, out)
-                    if outcome.success:
-                        return outcome
-                    side_failures.append(outcome.reason.removeprefix(f"{name}: "))
+            outcome = self._pick_side_first(name, node, cls, position, quat, stand, failures)
+            if outcome is not None:
+                return outcome
+        return self._pick_from_above(name, node, cls, position, quat, failures)
+
+    def _pick_side_first(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
+                         stand: np.ndarray, failures: list[str]) -> SkillResult | None:
+        """Pick `name` (at `position`, m; body `quat`, wxyz) from furniture `node`'s open top as a shelf takes
+        it (see `_pick_from_shelf` with `out`), from each of its sides that faces `stand` (the xy, m, where the
+        robot would stand), nearest first; the successful outcome, or None with each side's failure added to
+        `failures`."""
+        toward = (stand - position[:2]) / max(float(np.linalg.norm(stand - position[:2])), 1e-9)
+        yaw = 2.0 * math.atan2(quat[3], quat[0])
+        axes = [np.array([math.cos(yaw + a), math.sin(yaw + a)]) for a in np.arange(4) * math.pi / 2]
+        for out in sorted(axes, key=lambda a: -float(a @ toward)):  # the object's sides, nearest side first
+            if out @ toward > -0.5:
+                outcome = self._pick_from_shelf(name, node, cls, position, quat, out)
+                if outcome.success:
+                    return outcome
+                failures.append(outcome.reason.removeprefix(f"{name}: "))
+        return None
+
+    def _pick_from_above(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
+                         failures: list[str]) -> SkillResult:
+        """Pick `name` from above: the robot goes to stand in front of furniture `node` (near it on the floor),
+        then each grasp from above in the order `rank_from_above` gives, from a base pose checked for it; those
+        no checked base pose reaches are tried last from where the robot stands."""
+        furniture = self.navigator.furniture.get(node)
         stand_failure = ""
         try:
             if furniture is None:  # on the floor of a room
                 goal = self.navigator.stand_near(tuple(position[:2]))
-                self.retract()
-                self.navigator.drive_to(goal, self.tucked(), **FREE_MOTION)
+                self.arm.retract()
+                self.navigator.drive_to(goal, self.arm.tucked(), **FREE_MOTION)
             else:
-                self.go_to(node, position[:2])
+                self.arm.go_to(node, position[:2])
         except NavigationError as error:
             stand_failure = str(error)  # a base pose checked for the grasp itself may still reach it
-        failures = side_failures
-        rim = None if furniture is None else drawer_rim(self.world, node, position)
+        grasps = self._above_candidates(node, cls, position, quat)
+        clear = [self._fingers_fit(g) for g in grasps]
+        offsets = [(o, fits) for g, fits in zip(grasps, clear, strict=True) for o in offset_grasps(cls, quat, g)
+                   if self._fingers_fit(o)]
+        unchecked = []
+        for grasp in rank_from_above([*zip(grasps, clear, strict=True), *offsets]):  # a clear way in first
+            outcome = self._grasp_from_above(name, grasp, stand_failure, checked_only=True)
+            if outcome is None:
+                unchecked += [] if grasp.kind.offset else [grasp]
+                continue
+            if outcome.success:
+                self.arm.held = name
+                return outcome
+            failures.append(f"{grasp.kind}: {outcome.reason}")
+        for grasp in unchecked:
+            outcome = self._grasp_from_above(name, grasp, stand_failure)
+            if outcome.success:
+                self.arm.held = name
+                return outcome
+            failures.append(f"{grasp.kind}: {outcome.reason}")
+        return SkillResult(False, f"{name}: every grasp failed ({'; '.join(failures)})")
+
+    def _above_candidates(self, node: str, cls, position: np.ndarray, quat: np.ndarray) -> list[Grasp]:
+        """The centred grasps from above of an object of `cls` at `position` (m; body `quat`, wxyz) on or in
+        furniture `node` (None: the floor), the robot where it stands now: top grasps (or a grip feature's, or
+        rim pinches), in a drawer also those squared to its walls, and raised copies of low objects'; out of a
+        drawer each rises past its front (see `rim_approach`)."""
+        rim = None if self.navigator.furniture.get(node) is None else drawer_rim(self.world, node, position)
         lift = 0.0 if rim is None else rim + DRAWER_CLEARANCE - (position[2] - cls.size[2] / 2)  # out of the drawer
         candidates = top_grasps(cls, position, quat, self.controller.q()[:2])
         if rim is not None:  # in a drawer, last: the palm square to its walls
             out = self.navigator.front_normal(node)
             candidates += squared_grasps(cls, position, quat, math.atan2(out[1], out[0]))
         candidates += raised_grasps(cls, position, candidates)
-        grasps = [replace(g, lift=max(g.lift, lift), approach=g.approach if rim is None else rim_approach(
+        return [replace(g, lift=max(g.lift, lift), approach=g.approach if rim is None else rim_approach(
             g, rim, DRAWER_CLEARANCE)) for g in candidates]
-        grasps.sort(key=lambda g: not self._fingers_fit(g))  # stable: the blocked ones last
-        offsets = [o for g in grasps for o in offset_grasps(cls, quat, g) if self._fingers_fit(o)]
-        unchecked = []
-        for grasp in sorted(grasps + offsets, key=lambda g: "-squared" in g.kind):  # squared last; a clear way in first
-            outcome = self._grasp_from_above(name, grasp, stand_failure, checked_only=True)
-            if outcome is None:
-                unchecked += [] if "-offset" in grasp.kind else [grasp]
-                continue
-            if outcome.success:
-                self.held = name
-                return outcome
-            failures.append(f"{grasp.kind}: {outcome.reason}")
-        for grasp in unchecked:
-            outcome = self._grasp_from_above(name, grasp, stand_failure)
-            if outcome.success:
-                self.held = name
-                return outcome
-            failures.append(f"{grasp.kind}: {outcome.reason}")
-        return SkillResult(False, f"{name}: every grasp failed ({'; '.join(failures)})")
 
     def _grasp_from_above(self, name: str, grasp: Grasp, stand_failure: str, checked_only: bool = False
                           ) -> SkillResult | None:
@@ -118,7 +165,7 @@ class Pick:
         where the robot stands, unless it found no place to stand (`stand_failure`, the reason). With
         `checked_only`, None (nothing moved) where no checked base pose reaches it."""
         try:
-            planned = self._go_to_grasp(grasp, np.zeros(3), 0.0, here_first=not stand_failure)
+            planned = self.arm.go_to_grasp(grasp, np.zeros(3), 0.0, here_first=not stand_failure)
         except NavigationError as error:
             return SkillResult(False, str(error))
         if planned is None and checked_only:
@@ -130,7 +177,7 @@ class Pick:
     def _fingers_fit(self, grasp: Grasp) -> bool:
         """Whether the fingers, open `grasp.pre_opening`, fit round the object at `grasp` without landing on
         anything else (a neighbour, a drawer's wall); True where the arm cannot tell from where it stands."""
-        at_grasp = self._ik(grasp.position, grasp.quat())
+        at_grasp = self.arm.solve(grasp.position, grasp.quat())
         q = at_grasp.q.copy()
         q[self.controller.n_body:] = grasp.pre_opening
         return not at_grasp.converged or self.clearance.fingers_clear(q)
@@ -160,15 +207,7 @@ class Pick:
         shelf takes (side grasps, the fingers as deep on the object as they reach, then pitched ones), approached
         against `out`. With `replan`, once a failed grasp has moved the object (see `disturbed`), the grasps are
         planned again for where it now stands (the others were for where it stood)."""
-        furniture = self.navigator.furniture[node]
-        if out is None:
-            out = self.navigator.front_normal(node)
-            front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
-            grasps = shelf_grasps(cls, position, quat, out, front, neighbour_footprints(self.world, name))
-        else:  # side grasps, then pitched ones (a hand pointing straight down, or holding the object front to
-            front = -np.inf  # back, "-along", does not put it down under a shelf)
-            grasps = [g for g in shelf_grasps(cls, position, quat, out, front)
-                      if not g.kind.endswith(("-90", "-along")) and "-rolled" not in g.kind]
+        grasps, out, front = self._shelf_candidates(name, node, cls, position, quat, out)
         if not grasps:
             return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
         unreachable, failures = [], []
@@ -178,7 +217,7 @@ class Pick:
             if direct and grasp.kind not in unreachable:
                 continue
             try:
-                planned = self._go_to_grasp(grasp, pull, max(front, 0.0) + ENTRY_OUT, direct=direct)
+                planned = self.arm.go_to_grasp(grasp, pull, max(front, 0.0) + ENTRY_OUT, direct=direct)
             except NavigationError as error:
                 failures.append(f"{grasp.kind}: {error}")
                 continue
@@ -190,17 +229,33 @@ class Pick:
                 unreachable.remove(grasp.kind)  # reached after all: its outcome is reported instead
             outcome = self._try_grasp(name, grasp, pull=pull, path_in=planned[0], first_lift=planned[1])
             if outcome.success:
-                self.held = name
+                self.arm.held = name
                 return outcome
             failures.append(f"{grasp.kind}: {outcome.reason}")
             now = self.world.object_pose(name)
-            if replan and disturbed(position, quat, *now) and not self._fallen_over(name):
+            if replan and disturbed(position, quat, *now) and not self.arm.fallen_over(name):
                 again = self._pick_from_shelf(name, node, cls, *now, out, replan=False)
                 return again if again.success else SkillResult(False, f"{again.reason} (moved by {failures})")
         if unreachable:
-            failures.append(f"{', '.join(unreachable)}: no free base pose reaches the grasp without the arm "
+            failures.append(f"{', '.join(map(str, unreachable))}: no free base pose reaches the grasp without the arm "
                             f"touching {node} or its contents")
         return SkillResult(False, f"{name}: every grasp in {node} failed ({'; '.join(failures)})")
+
+    def _shelf_candidates(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
+                          out: np.ndarray | None) -> tuple[list[Grasp], np.ndarray, float]:
+        """(grasps, out, front) for `_pick_from_shelf`: without `out`, the grasps of `name` inside cabinet `node`
+        approached against its front normal (`out`, shape (2,)), the front plane `front` m out from the object,
+        the palm clear of its neighbours; with `out`, those a shelf takes next (level, then pitched: a hand
+        pointing straight down, holding the object front to back or leaning aside does not put it down under a
+        shelf), approached against `out` from anywhere (`front` -inf)."""
+        if out is None:
+            furniture = self.navigator.furniture[node]
+            out = self.navigator.front_normal(node)
+            front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
+            return shelf_grasps(cls, position, quat, out, front, neighbour_footprints(self.world, name)), out, front
+        grasps = [g for g in shelf_grasps(cls, position, quat, out, -np.inf)
+                  if g.kind.pitch != 90 and not g.kind.along and not g.kind.roll]
+        return grasps, out, -np.inf
 
     def _try_grasp(self, name: str, grasp: Grasp, pull: np.ndarray | None = None,
                    path_in: list[np.ndarray] | None = None, first_lift: float = SIDE_LIFT) -> SkillResult:
@@ -214,14 +269,14 @@ class Pick:
         back = -grasp.rotation[:, 0]  # from the grasp towards where the gripper comes from
         above = grasp.position + grasp.approach * back
         if path_in is None:
-            pre = self._ik(above, quat)
+            pre = self.arm.solve(above, quat)
             if not pre.converged:
                 return SkillResult(False, f"approach pose {pre.reason}")
             path_in = [pre.q]
         planned = self._descent(above, grasp.position, quat, seed=path_in[-1])  # nothing moved yet
         if planned is not None and not self._closing_clear(planned[-1], grasp.pre_opening):
             return SkillResult(False, "a closing finger would strike something other than the object")
-        self.reach(path_in[0], grip=grasp.pre_opening)
+        self.arm.reach(path_in[0], grip=grasp.pre_opening)
         if len(path_in) > 1:
             self.controller.move_through(path_in[1:], grip=grasp.pre_opening)
         self.controller.settle(0.003)
@@ -235,6 +290,14 @@ class Pick:
         if opening < MIN_HELD_OPENING:
             self._back_off(above, quat)
             return SkillResult(False, f"fingers closed on nothing (opening {opening * 1000:.1f} mm)")
+        return self._lift_and_hold(name, grasp, above, start, pull, first_lift)
+
+    def _lift_and_hold(self, name: str, grasp: Grasp, above: np.ndarray, start: np.ndarray,
+                       pull: np.ndarray | None, first_lift: float) -> SkillResult:
+        """With the fingers closed on `name` (which stood at `start`, m) at `grasp`, lift it as `_try_grasp`
+        says, turn the hand until it hangs where the grasp asks for that, hold HOLD_SECONDS and check that it rose
+        at least half as far as the hand; on failure back off to `above` (the approach point, m)."""
+        quat = grasp.quat()
         up = np.array([0.0, 0.0, 1.0])
         if pull is not None:
             legs = [first_lift * up, SIDE_PULL * pull, SIDE_RAISE * up]
@@ -243,9 +306,9 @@ class Pick:
         legs[-1] = legs[-1] + max(0.0, grasp.lift - sum(leg[2] for leg in legs)) * up  # raised further
         point = grasp.position
         for leg in legs:  # the base follows a horizontal leg; a vertical one only where the arm alone falls short
-            path = self._line(point, point + leg, quat, base_cost=PULL_BASE_COST if leg[2] == 0 else GRASP_BASE_COST)
+            path = self.arm.line(point, point + leg, quat, base_cost=PULL_BASE_COST if leg[2] == 0 else GRASP_BASE_COST)
             if path is None and leg[2] != 0:
-                path = self._line(point, point + leg, quat, base_cost=PULL_BASE_COST)
+                path = self.arm.line(point, point + leg, quat, base_cost=PULL_BASE_COST)
             if path is None:
                 self._back_off(above, quat)
                 return SkillResult(False, "the lift leaves the arm's reach")
@@ -255,7 +318,7 @@ class Pick:
             com = self.world.data.xipos[self.world.object_body_ids[self.world.object_index(name)]]
             grip = self.world.data.site("robot/grip")
             turned = hang_rotation(grip.xmat.reshape(3, 3), grip.xpos, com)
-            path = self._hand_line(point, matrix_to_quat(turned), GRASP_BASE_COST, partial=True)
+            path = self.arm.hand_line(point, matrix_to_quat(turned), GRASP_BASE_COST, partial=True)
             if path:  # as far as the arm turns it
                 self.controller.move_through(path)
         self.world.step(int(HOLD_SECONDS / self.world.model.opt.timestep))
@@ -268,27 +331,27 @@ class Pick:
 
     def _descent(self, above: np.ndarray, position: np.ndarray, quat: np.ndarray, seed: np.ndarray | None = None
                  ) -> list[np.ndarray] | None:
-        """`_line` from `above` down onto a grasp at `position` (m), from configuration `seed` (default: the
+        """`line` from `above` down onto a grasp at `position` (m), from configuration `seed` (default: the
         controller's target): its waypoints within WAYPOINT_TOL, each seeding the next, unless one of them strays
         more than DESCENT_DRIFT m from the line (loose points drifted 6, 11, 14 mm aside on the way into a milk
         carton's side grasp, and a pad struck it: SIDE_MARGIN is 10 mm); then every waypoint exact, if the arm
         reaches them so (tight ones may stall near joint limits)."""
-        path = self._line(above, position, quat, seed=seed)
+        path = self.arm.line(above, position, quat, seed=seed)
         if path is None:
             return None
         way = (position - above) / max(float(np.linalg.norm(position - above)), 1e-9)
         offsets = [self.ik.grip_pose(q)[0] - above for q in path]
         if max(float(np.linalg.norm(d - (d @ way) * way)) for d in offsets) <= DESCENT_DRIFT:
             return path
-        return self._line(above, position, quat, seed=seed, exact=True) or path
+        return self.arm.line(above, position, quat, seed=seed, exact=True) or path
 
     def _back_off(self, above: np.ndarray, quat: np.ndarray) -> None:
         """Open the fingers and return above the grasp (then tuck)."""
         self.controller.set_grip(0.05, seconds=0.3)
-        result = self._ik(above, quat, seeds=False)
+        result = self.arm.solve(above, quat, seeds=False)
         if result.converged:
             self.controller.move_through([result.q])
-        self.retract()
+        self.arm.retract()
 
     def _under_a_shelf(self, node: str, position: np.ndarray, height: float) -> bool:
         """Whether an object of `height` m at `position` stands on a fixed shelf of furniture `node` with another

@@ -1,0 +1,116 @@
+"""Our predictor: analog forecasting over whole arrangements (`analogs`).
+
+Why: the per-object time-of-day Markov chain wins on our data because routines are per-object and tied to the
+clock; it loses what SLaTe-PRO exploits, that the whole arrangement tells which activity is under way (bowl and
+cereal on the table: milk comes next), and a chain fed its own output compounds its errors over 60 minutes.
+So, with no network to train, each query looks up its *analogs*: the training steps at a similar time of day whose
+arrangement of movable objects resembles the observed one, and predicts every lookahead step directly from what
+followed them (no feedback). For a query (arrangement A, minute t) and a training step j (arrangement A_j, minute
+t_j, parents F_j(s) s steps later):
+
+    w_j = exp(-dt_j^2 / (2 sigma^2)) * exp(-lambda * hamming(A, A_j)),   |dt_j| <= 2.5 sigma (circular day)
+    P_o(s)[d] ~ sum_j w_j [A_j[o] == A[o]] [F_j(s)[o] == d] + a [d == A[o]]
+
+Only analogs where object o sat where it sits now count for o; `a` (stay_prior) keeps an object in place when its
+situation was never seen. lambda = 0 is a direct multi-step, per-object, time-of-day transition table. Tunables
+(sigma_min, lambda, stay_prior, threshold) are chosen on validation days like every method's (model.evaluate).
+Training stores the fit days' movable parents (int16); nothing is learned by gradient.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from homer_sim.data.dataset import GRID_MIN, DatasetMeta, Day
+from model.baselines import MINUTES_PER_DAY
+from model.predictor import THRESHOLDS, ModelError, Predictor, Rollout, summarise_step
+
+SLOTS = MINUTES_PER_DAY // GRID_MIN
+REACH_SIGMAS = 2.5  # analogs further apart in time than this many kernel widths are not looked at
+
+
+class Analogs(Predictor):
+    """Kernel-weighted analogs of (time of day, arrangement); direct multi-step prediction per object."""
+
+    method = "analogs"
+    grid = {"threshold": THRESHOLDS, "sigma_min": (10.0, 5.0, 20.0, 40.0), "similarity": (0.5, 0.0, 1.0, 2.0),
+            "stay_prior": (0.1, 0.02, 0.5)}
+
+    def __init__(self, meta: DatasetMeta, **params: float) -> None:
+        self.rows = np.flatnonzero(meta.movable_mask)  # (M,) node index of each movable object
+        self.states = np.zeros((0, len(self.rows)), dtype=np.int16)  # (J, M) parents of movable objects
+        self.minutes = np.zeros(0, dtype=np.int32)  # (J,) routine minute of each stored step
+        self.last = np.zeros(0, dtype=np.int64)  # (J,) flat index of the last step of j's day
+        self._buckets: dict[int, list[np.ndarray]] = {}
+        super().__init__(meta, **params)
+
+    def fit(self, fit_days: Sequence[Day], val_days: Sequence[Day]) -> None:
+        """Store the fit days' arrangements (validation days are for tuning only)."""
+        if not fit_days:
+            raise ModelError("no days to learn from; give at least one training day")
+        self.load_state({"states": np.concatenate([d.parent[:, self.rows] for d in fit_days]),
+                         "minutes": np.concatenate([d.minutes for d in fit_days]),
+                         "lengths": np.array([d.steps for d in fit_days])})
+
+    def state(self) -> dict[str, np.ndarray]:
+        starts = np.flatnonzero(np.r_[True, self.last[1:] != self.last[:-1]]) if len(self.last) else np.zeros(0, int)
+        return {"states": self.states, "minutes": self.minutes, "lengths": np.diff(np.r_[starts, len(self.last)])}
+
+    def load_state(self, arrays: dict[str, np.ndarray]) -> None:
+        self.states = np.asarray(arrays["states"], dtype=np.int16)
+        self.minutes = np.asarray(arrays["minutes"], dtype=np.int32)
+        lengths = np.asarray(arrays["lengths"], dtype=np.int64)
+        self.last = np.repeat(np.cumsum(lengths) - 1, lengths)
+        self._buckets = {}
+
+    def _candidates(self, minute: float) -> np.ndarray:
+        """Indices of stored steps within REACH_SIGMAS kernel widths of `minute` (circular)."""
+        reach = max(1, int(np.ceil(REACH_SIGMAS * self.params["sigma_min"] / GRID_MIN)))
+        if reach not in self._buckets:
+            slot = np.round(self.minutes / GRID_MIN).astype(np.int64) % SLOTS
+            by_slot = [np.flatnonzero(slot == s) for s in range(SLOTS)]
+            self._buckets[reach] = [np.concatenate([by_slot[(s + k) % SLOTS] for k in range(-reach, reach + 1)])
+                                    for s in range(SLOTS)]
+        return self._buckets[reach][int(round(minute / GRID_MIN)) % SLOTS]
+
+    def forecast(self, parent: np.ndarray, minute: float, steps: int) -> np.ndarray:
+        """Parent probabilities of the movable objects at 1 .. `steps` steps after one observed graph.
+
+        parent: Shape (N,) observed parents. minute: the observed routine minute. Returns Shape (steps, M, N).
+        """
+        n, m = self.n_nodes, len(self.rows)
+        observed = np.asarray(parent, dtype=np.int64)[self.rows]
+        prior = np.zeros((m, n))
+        prior[np.arange(m), observed] = self.params["stay_prior"]
+        cand = self._candidates(minute)
+        out = np.broadcast_to(prior, (steps, m, n)).copy()
+        if len(cand):
+            lag = np.abs(self.minutes[cand] - minute) % MINUTES_PER_DAY
+            lag = np.minimum(lag, MINUTES_PER_DAY - lag)
+            same = self.states[cand] == observed[None]  # (C, M)
+            weight = np.exp(-0.5 * (lag / self.params["sigma_min"]) ** 2
+                            - self.params["similarity"] * (~same).sum(axis=1))  # (C,)
+            mass = (weight[:, None] * same).ravel()
+            offset = np.arange(m)[None] * n
+            for s in range(steps):
+                future = self.states[np.minimum(cand + s + 1, self.last[cand])].astype(np.int64)
+                out[s] += np.bincount((offset + future).ravel(), weights=mass, minlength=m * n).reshape(m, n)
+        return out / np.maximum(out.sum(axis=-1, keepdims=True), 1e-12)
+
+    def rollout(self, parent: np.ndarray, minute: np.ndarray, steps: int) -> Rollout:
+        """Direct prediction of every step from the observed graphs (no feedback). parent (B, N); minute (B,)."""
+        parent = np.asarray(parent, dtype=np.int64)
+        probs = np.zeros((steps, len(parent), self.n_nodes, self.n_nodes), dtype=np.float32)
+        for b in range(len(parent)):
+            probs[:, b, self.rows] = self.forecast(parent[b], float(minute[b]), steps)
+        return self._finish(parent, [summarise_step(p, parent) for p in probs])
+
+    def step(self, probs: np.ndarray, minute: np.ndarray) -> np.ndarray:
+        """One step from the most likely arrangement of `probs` (B, N, N) at minute - GRID_MIN."""
+        out = np.array(probs, dtype=np.float32, copy=True)
+        parent = np.asarray(probs).argmax(axis=-1)
+        for b in range(len(out)):
+            out[b, self.rows] = self.forecast(parent[b], float(minute[b]) - GRID_MIN, 1)[0]
+        return out

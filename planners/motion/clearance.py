@@ -1,0 +1,122 @@
+"""Whether a robot configuration touches the apartment (`ClearanceCheck`), with or without an object in the hand
+(`Held`), on a scratch copy of the simulation; and the IK base damping of moves whose base pose is planned."""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from planners.motion.control import robot_geom_ids
+from planners.robot import FINGER_GEOMS, PREFIX
+
+ARC_BASE_COST = 1e4  # IK damping on the base: the base is placed by the planner, the arm reaches
+
+
+@dataclass(frozen=True)
+class Held:
+    """An object in the hand: its geoms, its free joint's qpos address, and its pose in the grip site's frame
+    (position m, shape (3,); rotation, shape (3, 3)); it moves with the hand in clearance checks."""
+
+    geoms: frozenset[int]
+    qpos_adr: int
+    position: np.ndarray
+    rotation: np.ndarray
+
+
+class ClearanceCheck:
+    """Whether a robot configuration touches the apartment, on a scratch copy of the data (never the live one).
+
+    Contacts of the fingers are ignored (they are meant to touch the part); every other robot geom must keep
+    MARGIN m from everything. With a held object, the fingers are checked too, and the object must keep MARGIN
+    from everything but the robot.
+
+    Collisions run on a copy of the model whose filter keeps only the pairs a check reads (robot or held object
+    against the rest): apartment geoms lose their conaffinity, so the ~100 resting objects and the furniture are
+    not collided with each other at every check.
+    """
+
+    MARGIN = 0.005  # m
+    FINGER_GRAZE = 0.002  # m: an open finger may graze a neighbour's edge this deep (it slides off)
+
+    def __init__(self, world, controller) -> None:
+        self.world = world
+        self.model = copy.copy(world.model)
+        self.scratch = mujoco.MjData(self.model)
+        self.qpos_adr = controller.qpos_adr
+        robot = robot_geom_ids(world.model)
+        fingers = [world.model.geom(PREFIX + n).id for n in FINGER_GEOMS]
+        self.robot = np.zeros(world.model.ngeom, dtype=bool)
+        self.robot[robot] = True
+        self.fingers = np.zeros(world.model.ngeom, dtype=bool)
+        self.fingers[fingers] = True
+        self.checked = self.robot & ~self.fingers
+        self.conaffinity = world.model.geom_conaffinity.copy()
+        self.model.geom_conaffinity[~self.robot] = 0
+        assert _same_filter(world.model, self.robot), "the robot-only collision filter would drop pairs"
+        self.grip = world.model.site(PREFIX + "grip").id
+
+    def fingers_clear(self, q: np.ndarray) -> bool:
+        """True if the fingers at configuration q (shape (13,), the finger openings included) touch nothing: an
+        open hand about to close round an object has both fingers beside it, on nothing else (a graze of at most
+        FINGER_GRAZE m aside)."""
+        return not self.finger_contacts(q)
+
+    def finger_contacts(self, q: np.ndarray) -> set[int]:
+        """Ids of the geoms outside the robot that the fingers at configuration q (shape (13,), the finger
+        openings included) touch deeper than FINGER_GRAZE m."""
+        d = self.scratch
+        d.qpos[:] = self.world.data.qpos
+        d.qpos[self.qpos_adr] = q
+        mujoco.mj_kinematics(self.model, d)
+        mujoco.mj_collision(self.model, d)
+        g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
+        touching = ((self.fingers[g1] != self.fingers[g2]) & ~(self.robot[g1] & self.robot[g2])
+                    & (d.contact.dist[: d.ncon] < -self.FINGER_GRAZE))
+        return {int(g) for g in np.concatenate([g1[touching], g2[touching]]) if not self.robot[g]}
+
+    def clear(self, q: np.ndarray, articulation=None, value: float = 0.0, held: Held | None = None,
+              fingers: bool = False) -> bool:
+        """True if configuration q (shape (13,)) keeps MARGIN from the apartment, with `articulation` (if
+        given) at joint value `value` (rad or m), `held` (if given) in the hand, and everything else where it
+        is now. With `fingers`, the fingers are checked too (a hand swinging free touches nothing at all)."""
+        d = self.scratch
+        d.qpos[:] = self.world.data.qpos
+        d.qpos[self.qpos_adr] = q
+        if articulation is not None:
+            d.qpos[articulation.qpos_adr] = value
+        mujoco.mj_kinematics(self.model, d)
+        robot, checked = self.robot, self.robot if fingers else self.checked
+        if held is None:
+            mujoco.mj_collision(self.model, d)
+        else:
+            rotation = d.site_xmat[self.grip].reshape(3, 3)
+            d.qpos[held.qpos_adr:held.qpos_adr + 3] = d.site_xpos[self.grip] + rotation @ held.position
+            mujoco.mju_mat2Quat(d.qpos[held.qpos_adr + 3:held.qpos_adr + 7], (rotation @ held.rotation).ravel())
+            mujoco.mj_kinematics(self.model, d)
+            geoms = list(held.geoms)
+            robot = checked = robot.copy()  # the fingers are checked too, against all but the object
+            robot[geoms] = True
+            self.model.geom_conaffinity[geoms] = self.conaffinity[geoms]  # the object collides with the rest
+            try:
+                mujoco.mj_collision(self.model, d)
+            finally:
+                self.model.geom_conaffinity[geoms] = 0
+        g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
+        touching = (checked[g1] != checked[g2]) & ~(robot[g1] & robot[g2]) & (d.contact.dist[: d.ncon] < self.MARGIN)
+        return not touching.any()
+
+
+def _same_filter(model: mujoco.MjModel, robot: np.ndarray) -> bool:
+    """Whether MuJoCo's contype/conaffinity test passes the same pairs (any geom that may be in or on the robot,
+    against any geom off it) when the geoms off the robot have conaffinity 0, as in `ClearanceCheck.model`."""
+    kinds = np.unique(np.stack([model.geom_contype, model.geom_conaffinity], axis=1), axis=0)
+    off = np.unique(np.stack([model.geom_contype[~robot], model.geom_conaffinity[~robot]], axis=1), axis=0)
+    for contype, conaffinity in kinds:
+        before = (contype & off[:, 1]) | (off[:, 0] & conaffinity)
+        after = off[:, 0] & conaffinity
+        if not np.array_equal(before != 0, after != 0):
+            return False
+    return True

@@ -1,0 +1,93 @@
+"""Robot skills in physics: pick and place, doors and drawers, checked on the observed scene graph.
+
+Objects move only because the fingers hold them (no weld, no teleport). Each skill returns a `SkillResult`
+with success or a clear failure reason; a failed grasp is retried from the next grasp candidate.
+
+`Robot` builds the parts and hands each skill only what it uses: the IK, the controller, the navigator and the
+clearance check make the `Arm` (`planners.motion.arm`, the movement primitives and what the hand holds); `Pick`
+(`planners.skills.pick`) and `Place` (`planners.skills.place`) take the arm, the scene-graph observer and the
+furniture's places; doors and drawers are run by a `PartMover` (`planners.skills.doors`) on the arm.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from homer_sim.home.spots import Spots
+from homer_sim.observe import SceneGraphObserver
+from homer_sim.robot_spec import ROBOT, RobotSpec
+from planners.motion.arm import Arm
+from planners.motion.clearance import ClearanceCheck
+from planners.motion.control import Controller
+from planners.motion.ik import IKSolver
+from planners.motion.navigation import Navigator
+from planners.skills.doors import PartMover
+from planners.skills.pick import Pick
+from planners.skills.place import Place
+from planners.skills.result import SkillResult
+
+
+class Robot:
+    """The robot in a World: IK, control, navigation, scene-graph checks, and the skills built on them."""
+
+    def __init__(self, world, rng: np.random.Generator | None = None, robot: RobotSpec = ROBOT) -> None:
+        self.world = world
+        self.spec = robot
+        self.ik = IKSolver(robot=robot)
+        self.controller = Controller(world, robot=robot)
+        self.navigator = Navigator(world, self.controller, robot)
+        self.spots = Spots(world)
+        self.observer = SceneGraphObserver(world)
+        self.rng = rng if rng is not None else np.random.default_rng(0)
+        self.clearance = ClearanceCheck(world, self.controller)
+        self.arm = Arm(world, self.ik, self.controller, self.navigator, self.clearance)
+        self._pick = Pick(self.arm, self.observer, self.spots)
+        self._place = Place(self.arm, self.observer, self.spots, self.rng)
+
+    @property
+    def held(self) -> str | None:
+        """The name of the object in the hand, or None."""
+        return self.arm.held
+
+    @property
+    def tuck(self) -> np.ndarray:
+        """The tuck posture (shape (13,)) of the robot-only model, at its base pose."""
+        return self.arm.tuck
+
+    def pick(self, name: str, node: str | None = None, into: str | None = None) -> SkillResult:
+        """Grasp object `name` and lift it (see `planners.skills.pick.Pick.pick`)."""
+        return self._pick.pick(name, node, into)
+
+    def place(self, node: str, relation: int | None = None) -> SkillResult:
+        """Put the held object at a free spot ON or INSIDE furniture `node`, release it and retreat (see
+        `planners.skills.place.Place.place`)."""
+        return self._place.place(node, relation)
+
+    def retract(self) -> None:
+        """Tuck the arm in place (see `planners.motion.arm.Arm.retract`)."""
+        self.arm.retract()
+
+    def tucked(self) -> np.ndarray:
+        """The tuck posture at the current base pose and torso height (see `planners.motion.arm.Arm.tucked`)."""
+        return self.arm.tucked()
+
+    def raised(self, torso: float) -> np.ndarray:
+        """The tuck posture with the upper arm raised and the torso at `torso` m (see `Arm.raised`)."""
+        return self.arm.raised(torso)
+
+    # --- doors and drawers ---------------------------------------------------------------------------------
+    def open_articulation(self, name: str) -> SkillResult:
+        """Open door or drawer `name` (`<furniture>/<part>`, or a furniture with one part) above openness 0.9,
+        by holding its handle (and a door's free edge past the handle's reach); the arm ends tucked."""
+        if self.held is not None:
+            return SkillResult(False, f"open {name}: the hand holds {self.held}")
+        return SkillResult(*PartMover(self.arm).move_to(name, opening=True))
+
+    def close_articulation(self, name: str) -> SkillResult:
+        """Close door or drawer `name` below openness 0.05 (see `open_articulation`)."""
+        if self.held is not None:
+            return SkillResult(False, f"close {name}: the hand holds {self.held}")
+        return SkillResult(*PartMover(self.arm).move_to(name, opening=False))
+
+
+__all__ = ["Robot", "SkillResult"]
