@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from homer_sim import __version__
 from homer_sim.clock import DEFAULT_WINDOW_MIN
 from homer_sim.data.dataset import Dataset
 from homer_sim.data.generate import Generator, Sources
@@ -172,11 +173,13 @@ def _test_days(dataset: Dataset, household: str, days: int | None) -> int:
 
 
 def _cached_days(out: Path, spec: EvalSpec) -> dict[tuple[str, int], dict]:
-    """Day results of an earlier run of the same spec in `out` (a folder of another spec is refused)."""
+    """Day results of an earlier run of the same spec and package version in `out` (a folder of another one is
+    refused: its days were lived by other code or settings)."""
+    setting = {"spec": asdict(spec), "homer_sim": __version__}
     spec_path = out / "spec.json"
-    if spec_path.is_file() and json.loads(spec_path.read_text()) != asdict(spec):
+    if spec_path.is_file() and json.loads(spec_path.read_text()) != setting:
         raise HomerError(f"{out} holds an assist-eval of another setting ({spec_path.read_text()}); use another --out")
-    _write_json(spec_path, asdict(spec))
+    _write_json(spec_path, setting)
     found = {}
     for path in sorted((out / "days").glob("*.json")):
         result = json.loads(path.read_text())
