@@ -104,6 +104,21 @@ def cmd_replay(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_replay_check(args: argparse.Namespace) -> int:
+    from homer_sim.data.replay_check import replay_check
+
+    result = replay_check(args.household, progress=not args.json)
+
+    def share(x: float | None) -> str:
+        return "n/a" if x is None else f"{x:.1%}"
+
+    lines = [f"{result['days_completed']} of {result['days']} days completed; parent agreement "
+             f"{share(result['agreement'])}, graph changes seen {share(result['graph_changes_seen'])}", "causes:"]
+    lines += [f"  {count:>7}  {cause}" for cause, count in result["causes"].items()]
+    emit(result, args.json, lines)
+    return 0
+
+
 def cmd_import_homer_plus(args: argparse.Namespace) -> int:
     from homer_sim.data.homer_plus import import_household
 
@@ -161,6 +176,16 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     rep.add_argument("--rrd", type=Path, default=None, help="record the day with rerun here (one day script only)")
     rep.add_argument("--json", action="store_true", help='print {"days", "completed", "failed": {day: reason}}')
     rep.set_defaults(func=cmd_replay)
+
+    check = subparsers.add_parser(
+        "replay-check", help="replay a HOMER+ household and compare with the authors' graphs",
+        description="Replays every day script of an unpacked HouseholdX folder (scripts_train/, scripts_test/, "
+        "processed_seqLM_coarse/) and compares each movable object's parent every 10 minutes, and each <<Graph "
+        "Changes>> edge line after its action, with the authors' graphs; disagreements are counted by cause.")
+    check.add_argument("household", type=Path, help="the unpacked HouseholdX folder")
+    check.add_argument("--json", action="store_true",
+                       help='print {"days", "days_completed", "agreement", "graph_changes_seen", "causes", "failed"}')
+    check.set_defaults(func=cmd_replay_check)
 
     imports = subparsers.add_parser("import", help="convert external data into a homer-sim dataset")
     import_commands = imports.add_subparsers(dest="import_command", required=True, metavar="FORMAT")
