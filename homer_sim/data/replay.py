@@ -23,6 +23,7 @@ from tqdm import tqdm
 from homer_sim import __version__
 from homer_sim.clock import DAY_END_MIN
 from homer_sim.data.dataset import SPLITS, DatasetMeta, Day, day_path, write_day, write_meta
+from homer_sim.data.generate import world_meta
 from homer_sim.data.stats import LOG_NAME
 from homer_sim.errors import HomerError
 from homer_sim.person.aliases import Resolver
@@ -119,10 +120,7 @@ class Replayer:
         return task, day, {**info, "failed": reason} if reason else info
 
     def meta(self, households: list[str], extra: dict) -> DatasetMeta:
-        graph = self.world.declared_graph()
-        movable = set(self.world.object_names)
-        return DatasetMeta(graph.nodes, graph.categories, tuple(n in movable for n in graph.nodes),
-                           tuple(households), extra=extra)
+        return world_meta(self.world, households, extra)
 
 
 _WORKER: Replayer | None = None
