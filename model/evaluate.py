@@ -60,8 +60,8 @@ def tune(predictor: Predictor, queries: Queries, steps: int, target: str = "pape
     target "paper": the highest objective among settings that move at most MAX_UNUSED_WRONG_PCT of the unused
     objects, or the highest objective overall if none does. target "f1": the highest mean relocation F1 over
     steps 1 .. `steps`. target "assist": the highest `Counts.assistance()`, the fetches made ahead minus the
-    wrong moves a robot acting on every gated prediction would make. The threshold only changes the decision rule applied to a rollout, so one rollout per
-    combination of the other tunables scores every threshold.
+    wrong moves a robot acting on every gated prediction would make. The threshold only changes the decision rule
+    applied to a rollout, so one rollout per combination of the other tunables scores every threshold.
     """
     names = [k for k in predictor.grid if k != "threshold"]
     thresholds = predictor.grid.get("threshold", (predictor.params["threshold"],))
