@@ -133,7 +133,8 @@ class AssistTask:
         self.busy_until, self.free_at, self.reward = 0.0, -np.inf, 0.0
         self.outcomes: list[RelocationOutcome] = []
         scripts = self.generator.scripts_for(day.household)  # the stream of Generator.replay, stepped here
-        self.run = DayRun(self.executor, list(day.entries), scripts, day.key.streams()[1], day.end_min)
+        events, last = self.executor.begin_day(list(day.entries), scripts, day.key.streams()[1])
+        self.run = DayRun(self.executor, events, last, day.end_min)
         self.log.day = self.executor.log  # the person's day as it goes
         minute = self._advance()
         self.ended = minute is None  # the person could not even reach the first snapshot
