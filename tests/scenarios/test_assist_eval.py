@@ -17,6 +17,8 @@ from scenarios.episodes import make_setup
 from scenarios.policies import EmptyPolicy
 from scenarios.scoring import day_result
 
+pytestmark = pytest.mark.physics  # steps a whole apartment for seconds or more
+
 UNTIL = 390  # 06:30
 KEYS = {"relocations_planned", "relocations_done", "relocations_correct", "relocations_wrong", "fetches",
         "fetches_done_by_robot", "fetch_share", "collateral", "days", "wall_s_per_day"}

@@ -16,6 +16,8 @@ from scenarios.episodes import Setup, make_setup
 from scenarios.policies import EmptyPolicy, PsiPolicy, RandomPolicy, action_of
 from scenarios.scoring import day_result
 
+pytestmark = pytest.mark.physics  # steps a whole apartment for seconds or more
+
 END_MIN = 440  # 07:20
 TICKS = (END_MIN - 360) // 10 + 1  # snapshots 06:00 ... 07:20
 

@@ -22,6 +22,8 @@ from scenarios.psi import Relocation
 from scenarios.registry import SCENARIOS, get
 from scenarios.scoring import end_state, fetches
 
+pytestmark = pytest.mark.physics  # steps a whole apartment for seconds or more
+
 ITEMS = ("food_cereal", "milk", "bowl")
 TABLE = "table_dining_room"
 PUT_AWAY = {"food_cereal": {"cupboard"}, "milk": {"fridge"}, "bowl": {"sink_dining_room", "cupboard"}}
