@@ -16,6 +16,8 @@ from homer_sim.days import DayKey
 from homer_sim.errors import HomerError
 from homer_sim.execution import Backend
 
+pytestmark = pytest.mark.physics  # steps a whole apartment for seconds or more
+
 REFERENCE = Path(__file__).resolve().parents[3] / "shared" / "homer_reference"
 
 
