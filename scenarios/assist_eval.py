@@ -132,7 +132,11 @@ def assist_eval(spec: EvalSpec, households: Sequence[str] | None = None, days: i
     todo = [t for t in tasks if t not in cached]
     bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), desc="assisted days", unit="day",
                disable=not progress, dynamic_ncols=True)
-    with backend.run(assist_day, todo, DayRunner, (spec,)) as run:
+    from model.names import GNN_METHODS
+    from model.train import TORCH_THREADS
+
+    threads = TORCH_THREADS if spec.method in GNN_METHODS else 1  # a Ray task then runs torch as this process does
+    with backend.run(assist_day, todo, DayRunner, (spec,), cpus_per_task=threads) as run:
         for result in run:
             cached[(result["household"], result["day"])] = result
             _write_json(out / "days" / f"{result['household']}_{result['day']:03d}.json", result)
