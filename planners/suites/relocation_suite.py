@@ -184,7 +184,7 @@ def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, des
         return f"pick: {result.reason}"
     result = robot.place(destination)
     if not result.success:
-        return f"place: {result.reason}"
+        return result.reason if result.reason.startswith("place: ") else f"place: {result.reason}"
     for part in parts[::-1]:
         result = robot.close_articulation(part)
         if not result.success:
@@ -212,8 +212,9 @@ def run_triple(bench: Bench, occurrence: Occurrence, cls: str, rng: np.random.Ge
     before = bench.world.object_positions()
     try:
         failure = relocate(robot, bench.containers, occurrence.obj, occurrence.source, occurrence.destination)
-    except HomerError as error:
-        failure = f"error: {error}"
+    except Exception as error:  # a bug in a skill is this triple's failure, not the suite's end
+        log.exception("%s", occurrence.triple)
+        failure = f"error: {type(error).__name__} {error}"
     bench.world.settle(max_seconds=2.0)
     graph = robot.observer.update()
     ended = graph.parent_of(occurrence.obj) or ""
