@@ -12,7 +12,8 @@ object that is not cloth or a ball stands up, `Arm.fallen_over`), and no other o
 moved one) moved more than `planners.suites.collateral.MAX_DISPLACEMENT`. A triple the robot cannot be asked is
 excluded with its reason: a source or destination outside the apartment (the robot stays in), an object the
 robot cannot grasp (`ungraspable_reason`). Each failure gets a cause (the first word of its reason: the skill
-that failed, `wrong place`, `fell over`, `collateral`, `state`) for the cause table.
+that failed and what its reason says went wrong (`KINDS`), `wrong place`, `fell over`, `collateral`, `state`)
+for the cause table.
 
 mujoco and the planners that need it are imported inside the functions that run trials.
 """
@@ -42,6 +43,9 @@ SNAPSHOTS_BACK = 6  # snapshots searched back from the move for one where the ob
 TARGET_OVERALL = 0.97
 TARGET_CLASS = 0.9
 QUICK_SIZE = 6
+KINDS = ("fell out of the hand", "slipped", "no free base pose", "no path", "fell over", "has fallen over",
+         "closed on nothing", "rose only", "unreachable", "no free spot", "nothing rests on", "leaves the arm's reach",
+         "ended")  # what a skill's failure reason says went wrong, for the cause table
 
 
 @dataclass(frozen=True)
@@ -219,7 +223,7 @@ def run_triple(bench: Bench, occurrence: Occurrence, cls: str, rng: np.random.Ge
     graph = robot.observer.update()
     ended = graph.parent_of(occurrence.obj) or ""
     if failure is not None:
-        return result(failure.split(":")[0].split(" ")[0], failure, ended)
+        return result(cause_of(failure), failure, ended)
     if ended != occurrence.destination:
         return result("wrong place", f"{occurrence.obj} ended on {ended}", ended)
     if CATALOG[cls].family not in NO_FALL_FAMILIES and robot.arm.fallen_over(occurrence.obj):
@@ -227,6 +231,14 @@ def run_triple(bench: Bench, occurrence: Occurrence, cls: str, rng: np.random.Ge
     riders = {occurrence.obj} | {n for n in bench.world.object_names if _rides_on(graph, n, occurrence.obj)}
     found = displaced(bench.world, before, skip=riders)
     return result("collateral", collateral_reason(found), ended) if found else result("", "", ended)
+
+
+def cause_of(failure: str) -> str:
+    """The cause-table entry of a skill failure `failure` ("<skill>: <reason>"): the skill and the first of
+    KINDS its reason names (the last one it names, where it lists several grasps' failures)."""
+    skill = failure.split(":")[0].split(" ")[0]
+    named = [(failure.rfind(kind), kind) for kind in KINDS if kind in failure]
+    return f"{skill}: {max(named)[1]}" if named else skill
 
 
 def _rides_on(graph, node: str, carrier: str) -> bool:
