@@ -34,7 +34,8 @@ HEADLINE_WINDOW_MIN = DEFAULT_WINDOW_MIN
 CURVE_WINDOWS_MIN = tuple(range(10, 130, 10))
 MAX_UNUSED_WRONG_PCT = 1.0  # tuning keeps at least 99% of unused objects in place when any setting can
 TUNING_VERSION = 3  # bump when the tuning rule or a grid changes: cached tunings are then redone
-TARGETS = ("paper", "f1")  # what tunables are chosen for: the paper's objective, or relocation F1
+TARGETS = ("paper", "f1", "assist")  # what tunables are chosen for: the paper's objective, relocation F1, or
+# the assistance objective (fetches a robot acting on the predictions makes ahead, minus its wrong moves)
 QUERY_CHUNK = 128  # queries per rollout call, bounds memory of the dense (B, N, N) probabilities
 
 
@@ -58,8 +59,9 @@ def tune(predictor: Predictor, queries: Queries, steps: int, target: str = "pape
 
     target "paper": the highest objective among settings that move at most MAX_UNUSED_WRONG_PCT of the unused
     objects, or the highest objective overall if none does. target "f1": the highest mean relocation F1 over
-    steps 1 .. `steps`. The threshold only changes the decision rule applied to a rollout, so one rollout per
-    combination of the other tunables scores every threshold.
+    steps 1 .. `steps`. target "assist": the highest `Counts.assistance()`, the fetches made ahead minus the
+    wrong moves a robot acting on every gated prediction would make. The threshold only changes the decision rule
+    applied to a rollout, so one rollout per combination of the other tunables scores every threshold.
     """
     names = [k for k in predictor.grid if k != "threshold"]
     thresholds = predictor.grid.get("threshold", (predictor.params["threshold"],))
@@ -82,6 +84,8 @@ def _tuning_score(target: str, queries: Queries, predicted: np.ndarray, steps: i
     if target == "f1":
         return True, float(relocation_counts(queries, predicted, movable, steps).f1().mean())
     counts = score(queries, predicted, steps, movable)
+    if target == "assist":
+        return True, float(counts.assistance())
     return counts.unused_wrong <= MAX_UNUSED_WRONG_PCT / 100.0 * counts.unused, counts.objective()
 
 
@@ -114,17 +118,19 @@ class FitSpec:
 
 
 def tuning_key(target: str, window_min: int) -> str:
-    """Name of a tuning in a checkpoint's info: "paper@30" (paper objective at 30 min) or "f1" (steps 1 .. 6)."""
+    """Name of a tuning in a checkpoint's info: "paper@30" (paper objective at 30 min), "assist@30" (assistance
+    objective at 30 min) or "f1" (steps 1 .. 6)."""
     if target not in TARGETS:
         raise ModelError(f"unknown metric {target!r}; known: {', '.join(TARGETS)}")
-    return "f1" if target == "f1" else f"paper@{window_min}"
+    return "f1" if target == "f1" else f"{target}@{window_min}"
 
 
 def fit_tuned(spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | None = None,
               progress: bool = True, target: str = "paper") -> tuple[Predictor, dict]:
     """Load the cached predictor at `path` or fit one; tune it for `target` unless the cache already was.
 
-    target "paper" tunes at `window_min`, "f1" for SLaTe-PRO's F1 over 10 .. 60 minutes (window_min unused).
+    target "paper" and "assist" tune at `window_min`, "f1" for SLaTe-PRO's F1 over 10 .. 60 minutes (window_min
+    unused).
     Every tuning of one fit is kept in the checkpoint's info["tunings"]. Returns the predictor and its
     provenance (days, training report, tunings and their validation scores).
     """

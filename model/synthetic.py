@@ -1,6 +1,6 @@
 """Synthetic households of toy routines, written as a real dataset folder (for tests and benchmarks).
 
-The vocabulary mirrors the apartment (5 rooms, 31 furniture/appliances/decor, 87 movable objects, 123 nodes).
+The vocabulary is the apartment's (`homer_sim.home.apartment`: its rooms, furniture and objects' start places).
 A household is one habit per activity: the probability of doing it on a day, a mean start minute, a spread
 (minutes, normal jitter) and one script variant. A script is a list of (fraction of the duration, object,
 destination) actions; the destination "home" is the object's start place. While the person is away, the
@@ -18,46 +18,12 @@ import numpy as np
 from homer_sim.clock import DAY_END_MIN, DAY_START_MIN, GRID_MIN
 from homer_sim.data.dataset import DatasetMeta, Day, write_day, write_meta
 from homer_sim.graph import INSIDE, NONE, ON
+from homer_sim.home.apartment import default_layout
 
-ROOMS = ("bathroom", "dining_room", "bedroom", "home_office", "outside")
-FURNITURE = {  # name: (category, room)
-    "fridge": ("appliance", "dining_room"), "cupboard": ("furniture", "dining_room"),
-    "kitchen_counter_left": ("furniture", "dining_room"), "sink_dining_room": ("furniture", "dining_room"),
-    "dishwasher": ("appliance", "dining_room"), "stove": ("appliance", "dining_room"),
-    "kitchen_counter_right": ("furniture", "dining_room"), "kitchen_cabinet": ("furniture", "dining_room"),
-    "coffe_maker": ("appliance", "dining_room"), "table_dining_room": ("furniture", "dining_room"),
-    "bookshelf_dining_room": ("furniture", "dining_room"), "shoe_rack": ("furniture", "dining_room"),
-    "bench": ("furniture", "dining_room"), "mat": ("decor", "dining_room"),
-    "desk_home_office": ("furniture", "home_office"), "chair_home_office": ("furniture", "home_office"),
-    "bookshelf_home_office": ("furniture", "home_office"), "tvstand_home_office": ("furniture", "home_office"),
-    "table_home_office": ("furniture", "home_office"), "sofa_home_office": ("furniture", "home_office"),
-    "bed": ("furniture", "bedroom"), "table_bedroom": ("furniture", "bedroom"), "dresser": ("furniture", "bedroom"),
-    "bookshelf_bedroom": ("furniture", "bedroom"), "sofa_bedroom": ("furniture", "bedroom"),
-    "shower": ("furniture", "bathroom"), "toilet": ("furniture", "bathroom"),
-    "sink_bathroom": ("furniture", "bathroom"),
-    "bathroom_counter": ("furniture", "bathroom"), "bathroom_cabinet": ("furniture", "bathroom"),
-    "washing_machine": ("appliance", "bathroom"),
-}
-_HOMES = {  # start place: objects
-    "cupboard": "bowl plate spoon fork mug coffee_cup drinking_glass wine_glass food_cereal food_rice tea coffee oil "
-                "food_jam",
-    "fridge": "milk food_cheese food_butter food_vegetable food_apple wine",
-    "kitchen_counter_left": "knifeblock cutting_board knife food_bread",
-    "kitchen_counter_right": "sponge kitchentowel food_donut",
-    "kitchen_cabinet": "cookingpot dish_soap disinfectant_wipes trashbag cloth_napkin",
-    "bookshelf_dining_room": "magazine newspaper candle deck_of_cards chessboard",
-    "shoe_rack": "shoes slippers", "bench": "mail keys umbrella", "dining_room": "trashcan",
-    "desk_home_office": "keyboard mouse laptop headset notebook pen highlighter charger cd",
-    "bookshelf_home_office": "water_bottle", "tvstand_home_office": "remote_control cd_player",
-    "sofa_home_office": "instrument_guitar", "home_office": "vacuum_cleaner", "bed": "comforter pillow",
-    "table_bedroom": "alarm_clock spectacles cellphone",
-    "dresser": "clothes_shirt clothes_socks clothes_pants clothes_dress clothes_jacket wallet bag",
-    "bookshelf_bedroom": "book", "sofa_bedroom": "blanket", "bedroom": "basket_for_clothes",
-    "bathroom_counter": "toothbrush tooth_paste soap hairbrush facial_cleanser towel",
-    "bathroom_cabinet": "painkillers razor deodorant perfume hairdryer toilet_paper",
-    "shower": "shampoo conditioner", "washing_machine": "laundry_detergent",
-}
-HOME = {obj: place for place, objs in _HOMES.items() for obj in objs.split()}
+_LAYOUT = default_layout()
+ROOMS = tuple(_LAYOUT.room_names())
+FURNITURE = {f.name: (f.category, f.room) for f in _LAYOUT.furniture}  # name: (category, room)
+HOME = {o.name: o.parent for o in _LAYOUT.objects}  # object: its start place
 CONTAINERS = frozenset(ROOMS) | {"fridge", "cupboard", "dishwasher", "kitchen_cabinet", "dresser", "shower",
                                  "bathroom_cabinet", "trashcan", "basket_for_clothes", "sink_dining_room"}
 

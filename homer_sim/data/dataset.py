@@ -88,7 +88,7 @@ class Day:
     relation: np.ndarray
     schedule: tuple[tuple[str, float, float], ...] = ()
     moves: tuple[tuple[float, str, str, str, str], ...] = ()
-    key: DayKey | None = None  # None for days of format version 1
+    key: DayKey | None = None  # None for days not simulated from a key (imported, scripted, format 1)
 
     def __post_init__(self) -> None:
         t, n = self.parent.shape
@@ -110,8 +110,9 @@ class Day:
     def replay_key(self) -> DayKey:
         """The key to replay this day with; a DatasetError for a day saved without one."""
         if self.key is None:
-            raise DatasetError(f"day {self.household}/{self.split}/{self.index} predates day keys (dataset format "
-                               "version 1) and cannot be replayed: generate the dataset again")
+            raise DatasetError(f"day {self.household}/{self.split}/{self.index} has no DayKey (it was imported, "
+                               "replayed from a day script, or written in dataset format 1), so it cannot be "
+                               "replayed; generate such days with `homer generate`")
         return self.key
 
 

@@ -106,10 +106,15 @@ class Generator:
                          f"last: {failures[-1]}")
 
     def meta(self, households: list[str], extra: dict) -> DatasetMeta:
-        graph = self.world.declared_graph()
-        movable = set(self.world.object_names)
-        return DatasetMeta(graph.nodes, graph.categories, tuple(n in movable for n in graph.nodes),
-                           tuple(households), extra=extra)
+        return world_meta(self.world, households, extra)
+
+
+def world_meta(world: World, households: list[str], extra: dict) -> DatasetMeta:
+    """The dataset meta of days lived in `world`: its declared nodes, their categories and which are movable."""
+    graph = world.declared_graph()
+    movable = set(world.object_names)
+    return DatasetMeta(graph.nodes, graph.categories, tuple(n in movable for n in graph.nodes),
+                       tuple(households), extra=extra)
 
 
 # --- worker pool ------------------------------------------------------------------------------------------

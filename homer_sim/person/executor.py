@@ -29,7 +29,6 @@ from homer_sim.world import World
 log = logging.getLogger(__name__)
 
 
-
 class ActionError(HomerError):
     """An action of an activity's script could not be carried out; names the activity, line and reason."""
 
@@ -47,6 +46,8 @@ class DayLog:
     relations: list[np.ndarray] = field(default_factory=list)
     moves: list[tuple[float, str, str, str, str]] = field(default_factory=list)
     schedule: list[tuple[str, float, float]] = field(default_factory=list)
+    switches: list[tuple[float, str, str]] = field(default_factory=list)
+    """(routine minute, node, "ON" or "OFF") for every switchon/switchoff the person did."""
 
 
 class Executor:
@@ -72,6 +73,7 @@ class Executor:
             self.parts.setdefault(art.furniture, []).append(art)
         self.day = DayState(float(DAY_START_MIN), np.random.default_rng(0))
         self.log = DayLog()
+        self.switched_on: set[str] = set()  # the appliances (nodes) the person has switched on and not off
         self.walker = Walker(world, self.avatar, self.spots, self.day, self.movable, self.rooms, recording)
         self.hands = Handling(world, self.avatar, self.spots, self.day, self.walker, self.observe, self.parts,
                               self.movable, self.rooms, recording)
@@ -111,6 +113,7 @@ class Executor:
         self.day.rng = rng
         self.day.minute = float(DAY_START_MIN)
         self.log = DayLog()
+        self.switched_on = set()
         self.hands.start_day()
         self.day.graph = self.observer.observe_all()
 
@@ -180,6 +183,12 @@ class Executor:
             self.walker.go(furniture)
             self.hands.close_parts(parts)
 
+    def switch(self, node: str, on: bool) -> None:
+        """Switch the appliance `node` on or off where it stands: its state goes to `switched_on` and the log."""
+        self.go_unless_carried(node)
+        (self.switched_on.add if on else self.switched_on.discard)(node)
+        self.log.switches.append((round(self.minute, 2), node, "ON" if on else "OFF"))
+
     def drop(self, name: str) -> None:
         room = self.world.layout.room_at(self.avatar.x, self.avatar.y)
         self.hands.put(name, room, INSIDE)
@@ -199,6 +208,8 @@ class Executor:
             "puton": lambda: self.hands.wear(args[0]),
             "putoff": lambda: self.hands.take_off(args[0]),
             "drop": lambda: self.drop(args[0]),
+            "switchon": lambda: self.switch(args[0], True),
+            "switchoff": lambda: self.switch(args[0], False),
         }
         if verb in handlers:
             handlers[verb]()
@@ -237,19 +248,29 @@ class Executor:
             events += [(t, activity, a) for t, a in timed_actions(scripts[activity], start, end, rng)]
             self.log.schedule.append((activity, float(start), float(end)))
         last = max([DAY_END_MIN] + [end for _, _, end in entries])
+        return self.live(events, last, after_tick, end_min)
+
+    def live(self, events, last: float, after_tick: Callable[[int], float] | None = None,
+             end_min: float | None = None, after_action: Callable[[int], None] | None = None) -> DayLog:
+        """Carry out `events`, (routine minute, activity, action) in time order, on a day already started, with a
+        snapshot every GRID_MIN minutes up to `last` (rounded up to the grid). after_tick and end_min as in
+        `run_day`; after_action: called with each event's index once it is done."""
         grid = range(DAY_START_MIN, int(math.ceil(last / GRID_MIN)) * GRID_MIN + 1, GRID_MIN)
-        pending = iter(events)
+        pending = iter(enumerate(events))
         event = next(pending, None)
         current, free_at = None, -math.inf
         for minute in grid:
             if end_min is not None and minute > end_min:
                 break
-            while event is not None and event[0] < minute:
-                self.minute = max(event[0], free_at)
-                if event[1] != current and self.recording is not None:
-                    self.recording.log_event(f"{event[1]} starts", routine_minute=event[0])
-                current = event[1]
-                self._perform(event[1], event[2])
+            while event is not None and event[1][0] < minute:
+                index, (at, activity, action) = event
+                self.minute = max(at, free_at)
+                if activity != current and self.recording is not None:
+                    self.recording.log_event(f"{activity} starts", routine_minute=at)
+                current = activity
+                self._perform(activity, action)
+                if after_action is not None:
+                    after_action(index)
                 event = next(pending, None)
             self.tick(minute)
             if after_tick is not None:

@@ -15,7 +15,9 @@ Blank lines, `#` comments (a `#` not followed by another `#`) and annotation lin
 are ignored. Names are resolved to node names by a callable (see `homer_sim.person.aliases.Resolver`).
 
 Verbs that change the world (`WORLD_VERBS`): walk, grab, open, close, putback, putin, putobjback, puton,
-putoff, drop. Every other accepted verb takes time only (`TIME_VERBS`); unknown verbs are errors.
+putoff, drop. Every other accepted verb (`TIME_VERBS`) is a timed avatar action: the person walks to what it acts
+on (unless holding it) and spends the action's time there; switchon and switchoff also keep the appliance's on/off
+state (`Executor.switched_on`, logged in `DayLog.switches`). Unknown verbs are errors naming file and line.
 """
 
 from __future__ import annotations
@@ -137,7 +139,8 @@ def _split_arguments(rest: str) -> list[str] | None:
     return names
 
 
-def _parse_action(text: str, line: int, resolve: Callable[[str], str], errors: list) -> Action | None:
+def parse_action(text: str, line: int, resolve: Callable[[str], str], errors: list) -> Action | None:
+    """One action line -> Action, or None after appending (line, reason) to `errors`."""
     match = _ACTION.match(text)
     names = _split_arguments(match.group(2)) if match else None
     if match is None or names is None:
@@ -192,7 +195,7 @@ def parse_script(text: str, path: str, activity: str, variant: str, resolve: Cal
                 parsed = (0.0, 0.0)
             header, actions = (parsed[0], parsed[1], number), []
             continue
-        action = _parse_action(stripped, number, resolve, errors)
+        action = parse_action(stripped, number, resolve, errors)
         if header is None:
             errors.append((number, "action before the first '## <min>-<max>' block header"))
         elif action is not None:

@@ -1,4 +1,5 @@
-"""`homer generate`, `homer dataset stats`, `homer simulate-day`, `homer compat-check`: the person's days as data."""
+"""`homer generate`, `homer dataset stats`, `homer simulate-day`, `homer compat-check`, `homer replay`,
+`homer replay-check`, `homer import homer-plus`: the person's days as data."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from pathlib import Path
 from homer_sim.clock import clock_text
 from homer_sim.days import DayKey
 from homer_sim.errors import HomerError
-from scenarios.cli.common import emit
+from scenarios.cli.common import emit, positive_int
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
@@ -75,6 +76,49 @@ def cmd_compat_check(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_replay(args: argparse.Namespace) -> int:
+    from homer_sim.data.replay import DayTask, Replayer, find_day_scripts, replay
+
+    if args.rrd is None:
+        result = replay(args.scripts, args.out, args.workers, args.household, progress=not args.json)
+        lines = [f"{result['completed']} of {result['days']} days in {args.out}"]
+        lines += [f"  {day}: {reason}" for day, reason in result["failed"].items()]
+        emit(result, args.json, lines)
+        return 0 if not result["failed"] else 1
+    from homer_sim.data.dataset import write_day, write_meta
+    from homer_sim.recording import Recording
+
+    tasks = find_day_scripts(args.scripts, args.household)
+    if len(tasks) != 1:
+        raise HomerError(f"--rrd records one day; {args.scripts} holds {len(tasks)} day scripts: give one NNN.txt")
+    recording = Recording(args.rrd)
+    replayer = Replayer(recording=recording)
+    recording.log_geometry(replayer.world.model, replayer.world.data)
+    task: DayTask = tasks[0]
+    day = replayer.day(task)
+    recording.close()
+    write_meta(args.out, replayer.meta([task.household], {"replay": {"scripts": str(task.path.resolve())}}))
+    write_day(args.out, day)
+    result = {"days": 1, "completed": 1, "failed": {}, "rrd": str(args.rrd)}
+    emit(result, args.json, [f"replayed {task.label} into {args.out}, recording in {args.rrd}"])
+    return 0
+
+
+def cmd_replay_check(args: argparse.Namespace) -> int:
+    from homer_sim.data.replay_check import replay_check
+
+    result = replay_check(args.household, progress=not args.json)
+
+    def share(x: float | None) -> str:
+        return "n/a" if x is None else f"{x:.1%}"
+
+    lines = [f"{result['days_completed']} of {result['days']} days completed; parent agreement "
+             f"{share(result['agreement'])}, graph changes seen {share(result['graph_changes_seen'])}", "causes:"]
+    lines += [f"  {count:>7}  {cause}" for cause, count in result["causes"].items()]
+    emit(result, args.json, lines)
+    return 0
+
+
 def cmd_import_homer_plus(args: argparse.Namespace) -> int:
     from homer_sim.data.homer_plus import import_household
 
@@ -119,6 +163,29 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     compat.add_argument("--scripts", type=Path, required=True, help="folder laid out <activity>/<name>.txt")
     compat.add_argument("--json", action="store_true", help="print one JSON object")
     compat.set_defaults(func=cmd_compat_check)
+
+    rep = subparsers.add_parser(
+        "replay", help="live timed day scripts (HOMER+ format) physically into a dataset",
+        description="Each day script NNN.txt (a HouseholdX folder with scripts_train/ and scripts_test/, a folder "
+        "of NNN.txt, or one file) is lived in our apartment at its actions' minutes and written as day NNN of "
+        "its split. A day that cannot run is reported with its reason and the run goes on; exit status 1 then.")
+    rep.add_argument("scripts", type=Path, help="a HouseholdX folder, a folder of NNN.txt day scripts, or one file")
+    rep.add_argument("--out", type=Path, required=True, help="dataset folder (created; an interrupted run resumes)")
+    rep.add_argument("--workers", type=positive_int, default=1, help="worker processes (1); bytes do not depend on it")
+    rep.add_argument("--household", default=None, help="household name (default: the HouseholdX folder's name)")
+    rep.add_argument("--rrd", type=Path, default=None, help="record the day with rerun here (one day script only)")
+    rep.add_argument("--json", action="store_true", help='print {"days", "completed", "failed": {day: reason}}')
+    rep.set_defaults(func=cmd_replay)
+
+    check = subparsers.add_parser(
+        "replay-check", help="replay a HOMER+ household and compare with the authors' graphs",
+        description="Replays every day script of an unpacked HouseholdX folder (scripts_train/, scripts_test/, "
+        "processed_seqLM_coarse/) and compares each movable object's parent every 10 minutes, and each <<Graph "
+        "Changes>> edge line after its action, with the authors' graphs; disagreements are counted by cause.")
+    check.add_argument("household", type=Path, help="the unpacked HouseholdX folder")
+    check.add_argument("--json", action="store_true",
+                       help='print {"days", "days_completed", "agreement", "graph_changes_seen", "causes", "failed"}')
+    check.set_defaults(func=cmd_replay_check)
 
     imports = subparsers.add_parser("import", help="convert external data into a homer-sim dataset")
     import_commands = imports.add_subparsers(dest="import_command", required=True, metavar="FORMAT")

@@ -8,10 +8,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from homer_sim.data.dataset import Day
-from model.evaluate import summarise
+from homer_sim.data.dataset import Dataset, Day
+from model.evaluate import rollout_queries, summarise, tune
+from model.methods import make_predictor
 from model.metrics import Counts, Queries, day_queries, first_change, gate, score, window_steps
 from model.predictor import ModelError, Rollout
+from model.synthetic import write_synthetic_dataset
 
 MOVABLE = np.array([False, False, False, True, True])
 ROOM, TABLE, SHELF, CUP, BOOK = range(5)
@@ -126,3 +128,23 @@ def test_window_must_be_a_positive_multiple_of_the_grid() -> None:
         window_steps(25, 10)
     with pytest.raises(ModelError, match="multiple of 10"):
         window_steps(0, 10)
+
+
+def test_the_assistance_objective_counts_fetches_made_ahead_minus_wrong_moves() -> None:
+    counts = Counts(used_correct=7, used_wrong=2, used_missed=5, unused_correct=400, unused_wrong=3)
+    assert counts.assistance() == 7 - 2 - 3
+
+
+def test_tuning_for_assistance_picks_the_threshold_with_the_most_assistance_on_validation_days(tmp_path) -> None:
+    write_synthetic_dataset(tmp_path, np.random.default_rng(4), households=1, train_days=8, test_days=1, size="small")
+    dataset = Dataset(tmp_path)
+    days = dataset.load("household_a", "train")
+    predictor = make_predictor("markov", dataset.meta, progress=False)
+    predictor.fit(days[:6], days[6:])
+    queries = day_queries(days[6:], 3)
+    params, best = tune(predictor, queries, 3, target="assist")
+    rollout = rollout_queries(predictor, queries, 3)
+    every = {t: score(queries, gate(rollout, queries.observed, t), 3, predictor.movable).assistance()
+             for t in predictor.grid["threshold"]}
+    assert best == max(every.values()) == every[params["threshold"]]
+    assert len(set(every.values())) > 1  # the threshold matters on this data

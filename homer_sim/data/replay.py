@@ -1,0 +1,186 @@
+"""`homer replay`: timed day scripts (the HOMER+ format, `homer_sim.person.day_scripts`) lived physically in our
+apartment at the scripts' minutes, written as dataset days (`homer_sim.data.dataset`).
+
+One day is one task: the person starts the day from the start layout, each action runs at its minute through the
+executor (as generation does), the scene graph is read every 10 minutes. A day's random stream (free spots) is
+seeded from its split and number, so a day gives the same bytes whatever the worker count. Days are written
+atomically; an interrupted run resumes with the days not yet written. A day that cannot run (a name our apartment
+lacks, an action that fails) is logged with its reason in `generation.log` and the run goes on.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from homer_sim import __version__
+from homer_sim.clock import DAY_END_MIN
+from homer_sim.data.dataset import SPLITS, DatasetMeta, Day, day_path, write_day, write_meta
+from homer_sim.data.generate import world_meta
+from homer_sim.data.stats import LOG_NAME
+from homer_sim.errors import HomerError
+from homer_sim.person.aliases import Resolver
+from homer_sim.person.avatar import add_avatar
+from homer_sim.person.day_scripts import DayScript, read_day_script
+from homer_sim.person.executor import DayLog, Executor
+from homer_sim.person.scripts import ScriptError
+from homer_sim.world import World
+
+SPLIT_FOLDERS = {f"scripts_{split}": split for split in SPLITS}
+
+
+@dataclass(frozen=True)
+class DayTask:
+    """One day script to replay and where its day goes in the dataset."""
+
+    path: Path
+    household: str
+    split: str
+    index: int
+
+    @property
+    def label(self) -> str:
+        return f"{self.household}/{self.split}/{self.index:03d}"
+
+
+def _numbered(folder: Path) -> list[Path]:
+    return sorted((p for p in folder.glob("*.txt") if p.stem.isdigit()), key=lambda p: int(p.stem))
+
+
+def find_day_scripts(scripts: str | Path, household: str | None = None) -> list[DayTask]:
+    """The day scripts at `scripts`: a HouseholdX folder (its scripts_train/ and scripts_test/), a folder of
+    NNN.txt (split test if it is named scripts_test, else train) or one NNN.txt file. `household` names the
+    household in the dataset (default: the HouseholdX folder's name, else "replay")."""
+    root = Path(scripts)
+    if root.is_file():
+        folders = [root.parent]
+    elif any((root / name).is_dir() for name in SPLIT_FOLDERS):
+        folders = [root / name for name in SPLIT_FOLDERS if (root / name).is_dir()]
+    else:
+        folders = [root]
+    house_dir = folders[0].parent if folders[0].name in SPLIT_FOLDERS else None
+    household = household or (house_dir.name if house_dir is not None else "replay")
+    files = [root] if root.is_file() else [p for folder in folders for p in _numbered(folder)]
+    if not files or not all(p.stem.isdigit() and p.suffix == ".txt" for p in files):
+        raise HomerError(f"{root}: no day scripts found (expected NNN.txt files, or scripts_train/ and "
+                         "scripts_test/ folders of them)")
+    return [DayTask(p, household, SPLIT_FOLDERS.get(p.parent.name, "train"), int(p.stem)) for p in files]
+
+
+def short_reason(error: HomerError) -> str:
+    """A one-line reason: the first problem of a ScriptError (with how many more), else the error's text."""
+    if isinstance(error, ScriptError):
+        more = f" (and {len(error.errors) - 1} more problems)" if len(error.errors) > 1 else ""
+        return f"{error.path}:{error.line}: {error.reason}{more}"
+    return f"{type(error).__name__}: {str(error).splitlines()[0]}"
+
+
+class Replayer:
+    """One worker's simulator: a World with an avatar and the person's executor."""
+
+    def __init__(self, recording=None) -> None:
+        self.world = World(extras=[add_avatar])
+        self.executor = Executor(self.world, recording=recording)
+        self.resolver = Resolver(self.world.layout.node_names())
+
+    def read(self, path: str | Path) -> DayScript:
+        """Parse a day script with this apartment's names (a ScriptError names file and line of each problem)."""
+        return read_day_script(path, self.resolver)
+
+    def live(self, script: DayScript, task: DayTask, after_action: Callable[[int], None] | None = None) -> DayLog:
+        """Live `script` as day `task`: each action at its minute, snapshots every 10 minutes; after_action gets the
+        index of each action once it is done (see `Executor.live`)."""
+        self.executor.start_day(np.random.default_rng([SPLITS.index(task.split), task.index]))
+        self.executor.log.schedule = [tuple(entry) for entry in script.schedule]
+        events = [(a.minute, a.activity, a.action) for a in script.actions]
+        return self.executor.live(events, max(float(DAY_END_MIN), script.end_min), after_action=after_action)
+
+    def day(self, task: DayTask) -> Day:
+        """Read and live day `task` into our dataset's Day (no DayKey: a replayed day is redone from its script)."""
+        record = self.live(self.read(task.path), task)
+        return Day(task.household, task.split, task.index, np.array(record.minutes, dtype=np.int32),
+                   np.array(record.parents, dtype=np.int16), np.array(record.relations, dtype=np.int8),
+                   tuple(record.schedule), tuple(record.moves))
+
+    def run(self, task: DayTask) -> tuple[DayTask, Day | None, dict]:
+        """(task, day or None, log record with the failure's reason if the day could not run)."""
+        started = time.perf_counter()
+        try:
+            day, reason = self.day(task), None
+        except HomerError as error:
+            day, reason = None, short_reason(error)
+        info = {"day": task.label, "script": str(task.path), "wall_s": round(time.perf_counter() - started, 3)}
+        return task, day, {**info, "failed": reason} if reason else info
+
+    def meta(self, households: list[str], extra: dict) -> DatasetMeta:
+        return world_meta(self.world, households, extra)
+
+
+_WORKER: Replayer | None = None
+
+
+def _init_worker() -> None:
+    global _WORKER
+    _WORKER = Replayer()
+
+
+def _run_task(task: DayTask) -> tuple[DayTask, Day | None, dict]:
+    assert _WORKER is not None
+    return _WORKER.run(task)
+
+
+def run_tasks(tasks: list[DayTask], workers: int, probe: Replayer) -> Iterator[tuple[DayTask, Day | None, dict]]:
+    """Each task's result, in order with one worker, as they finish with more (forked processes)."""
+    if workers <= 1:
+        for task in tasks:
+            yield probe.run(task)
+        return
+    with multiprocessing.get_context("fork").Pool(workers, initializer=_init_worker) as pool:
+        yield from pool.imap_unordered(_run_task, tasks, chunksize=1)
+
+
+def _check_existing(out: Path, meta: DatasetMeta) -> None:
+    path = out / "meta.json"
+    if path.exists():
+        existing = json.loads(path.read_text())
+        if existing.get("nodes") != list(meta.nodes) or existing.get("replay") != meta.extra["replay"]:
+            raise HomerError(f"{out} holds another dataset ({existing.get('replay') or existing.get('generator')}); "
+                             "replay into a new folder")
+    elif out.exists() and any(out.iterdir()):
+        raise HomerError(f"{out} exists and is not a homer-sim dataset; choose an empty or new folder")
+
+
+def replay(scripts: str | Path, out: str | Path, workers: int = 1, household: str | None = None,
+           progress: bool = True) -> dict:
+    """Replay every day script at `scripts` into the dataset folder `out` (resuming an interrupted run).
+
+    Returns {"days": scripts found, "completed": days in the folder, "failed": {day: reason}}."""
+    if workers < 1:
+        raise HomerError(f"--workers must be at least 1, not {workers}")
+    out = Path(out)
+    tasks = find_day_scripts(scripts, household)
+    probe = Replayer()
+    meta = probe.meta([tasks[0].household], {"replay": {"scripts": str(Path(scripts).resolve()),
+                                                        "homer_sim": __version__}})
+    _check_existing(out, meta)
+    write_meta(out, meta)
+    todo = [t for t in tasks if not day_path(out, t.household, t.split, t.index).exists()]
+    failed = {}
+    with open(out / LOG_NAME, "a") as log_file:
+        results = run_tasks(todo, workers, probe)
+        for task, day, info in tqdm(results, total=len(todo), desc="days", unit="day", disable=not progress):
+            if day is not None:
+                write_day(out, day)
+            else:
+                failed[task.label] = info["failed"]
+            log_file.write(json.dumps(info, sort_keys=True) + "\n")
+            log_file.flush()
+    completed = sum(day_path(out, t.household, t.split, t.index).exists() for t in tasks)
+    return {"days": len(tasks), "completed": completed, "failed": dict(sorted(failed.items()))}

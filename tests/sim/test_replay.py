@@ -1,0 +1,187 @@
+"""Timed day scripts (HOMER+ format): parsing, the physical replay into our dataset, and `replay-check` against a
+household folder built here (a day script and its matching graph file)."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import tarfile
+from collections import Counter
+from pathlib import Path
+
+import pytest
+import torch
+
+from homer_sim.data.dataset import Dataset
+from homer_sim.data.replay import Replayer, find_day_scripts, replay
+from homer_sim.data.replay_check import replay_check
+from homer_sim.person.aliases import default_resolver
+from homer_sim.person.day_scripts import GraphChange, parse_day_script
+from homer_sim.person.scripts import ScriptError
+from scenarios.cli.main import main
+
+DAY = """breakfast (08:00 - 08:20)
+watching_tv (08:20 - 1day - 00:40)
+
+
+### breakfast-00.txt
+
+[WALK] <dining_room> (11) [1]
+480.0
+## Breakfast until 08:20
+
+[FIND] <bowl> (1001) [2]
+481.0
+[GRAB] <bowl> (1001) [3]
+482.0
+<<Graph Changes>>
+   - bowl INSIDE cupboard
+   + character HOLDS_RH bowl
+
+[PUTBACK] <bowl> (1001) <table> (231) [4]
+483.5
+<<Graph Changes>>
+   + bowl ON table
+
+483.5: bowl moved
+<<Activity Change>>
+### watching_tv-01.txt
+
+[SWITCHON] <tv> (426) [1]
+500.0
+<<Graph Changes>>
+   (s)426tv['OFF']->['ON']
+
+[SIT] <sofa> (368) [2]
+501.0
+<<Graph Changes>>
+   + bowl INSIDE cupboard
+
+[STANDUP] [3]
+515.0
+[SWITCHOFF] <tv> (426) [4]
+516.0
+"""
+
+
+def test_day_script_reads_header_minutes_and_edge_changes() -> None:
+    day = parse_day_script(DAY, "000.txt", default_resolver())
+    assert day.schedule == (("breakfast", 480.0, 500.0), ("watching_tv", 500.0, 1480.0))
+    assert [(a.minute, a.activity, a.action.verb, a.action.args) for a in day.actions] == [
+        (480.0, "breakfast", "walk", ("dining_room",)), (481.0, "breakfast", "find", ("bowl",)),
+        (482.0, "breakfast", "grab", ("bowl",)), (483.5, "breakfast", "putback", ("bowl", "table_dining_room")),
+        (500.0, "watching_tv", "switchon", ("tvstand_home_office",)),
+        (501.0, "watching_tv", "sit", ("sofa_home_office",)), (515.0, "watching_tv", "standup", ()),
+        (516.0, "watching_tv", "switchoff", ("tvstand_home_office",))]
+    assert day.actions[2].changes == (GraphChange(16, "-", "bowl", "INSIDE", "cupboard"),)  # HOLDS_RH not compared
+    assert day.actions[3].changes == (GraphChange(22, "+", "bowl", "ON", "table"),) and day.end_min == 1480.0
+
+
+@pytest.mark.parametrize(("line", "expected"), [
+    ("[JUMP] <bowl> (1) [1]", "000.txt:7: unknown verb 'jump'"),
+    ("[GRAB] <fryingpan> (1) [1]", "000.txt:7: unknown name 'fryingpan'"),
+])
+def test_unknown_verb_or_object_names_file_and_line(line: str, expected: str) -> None:
+    text = DAY.replace("[WALK] <dining_room> (11) [1]", line)
+    with pytest.raises(ScriptError) as caught:
+        parse_day_script(text, "000.txt", default_resolver())
+    assert str(caught.value).startswith(expected) and caught.value.line == 7
+
+
+def test_action_without_minute_and_backwards_time_are_errors() -> None:
+    with pytest.raises(ScriptError, match=r"000.txt:7: action has no minute"):
+        parse_day_script(DAY.replace("480.0\n", "", 1), "000.txt", default_resolver())
+    with pytest.raises(ScriptError, match=r"000.txt:13: minute 470 is before the previous action's 481"):
+        parse_day_script(DAY.replace("482.0", "470.0"), "000.txt", default_resolver())
+
+
+def _household(root: Path, their_bowl_back_at: int) -> Path:
+    """A HOMER+-like household: day train/000 (DAY) and its graph, where the bowl goes from the cupboard onto the
+    table at 08:10 and back into the cupboard at minute `their_bowl_back_at`."""
+    (root / "scripts_train").mkdir(parents=True)
+    (root / "scripts_train" / "000.txt").write_text(DAY)
+    folder = root / "processed_seqLM_coarse"
+    (folder / "train").mkdir(parents=True)
+    classes = ["home", "dining_room", "table", "cupboard", "bowl"]
+    common = {"node_ids": [1, 11, 231, 100, 1001], "node_classes": classes, "dt": 10, "static_nodes": [231, 100],
+              "node_categories": ["Home", "Rooms", "Furniture", "Furniture", "placable_objects"],
+              "activities": ["breakfast", "watching_tv"]}
+    (folder / "common_data.json").write_text(json.dumps(common))
+    times = torch.arange(360, 1441, 10, dtype=torch.float32)
+    parents = torch.tensor([0, 0, 1, 1, 3]).repeat(len(times), 1)
+    parents[(times >= 490) & (times < their_bowl_back_at), 4] = 2
+    edges = torch.nn.functional.one_hot(parents, 5).float()
+    torch.save({"edges": edges, "times": times, "activity": torch.zeros(len(times), dtype=torch.long)},
+               folder / "train" / "000.pt")
+    return root
+
+
+@pytest.mark.physics
+def test_replay_lives_the_day_at_its_minutes_and_keeps_switch_state(tmp_path: Path) -> None:
+    folder = _household(tmp_path / "HouseholdT", 2000)
+    replayer = Replayer()
+    task = find_day_scripts(folder)[0]
+    record = replayer.live(replayer.read(task.path), task)
+    assert record.moves == [(483.5, "bowl", "cupboard", "table_dining_room", "ON")]
+    assert record.switches == [(500.0, "tvstand_home_office", "ON"), (516.0, "tvstand_home_office", "OFF")]
+    assert replayer.executor.switched_on == set() and record.minutes == list(range(360, 1481, 10))
+    result = replay(folder, tmp_path / "out", progress=False)
+    assert result == {"days": 1, "completed": 1, "failed": {}}
+    day = Dataset(tmp_path / "out").load("HouseholdT", "train")[0]
+    assert day.moves == ((483.5, "bowl", "cupboard", "table_dining_room", "ON"),) and day.steps == 113
+    first = (tmp_path / "out" / "HouseholdT" / "train" / "day_000.npz").read_bytes()
+    assert replay(folder, tmp_path / "out", progress=False)["completed"] == 1  # resumed: nothing redone
+    replay(folder, tmp_path / "again", progress=False)
+    assert (tmp_path / "again" / "HouseholdT" / "train" / "day_000.npz").read_bytes() == first
+
+
+@pytest.mark.physics
+def test_replay_check_counts_agreement_changes_and_causes(tmp_path: Path) -> None:
+    folder = _household(tmp_path / "HouseholdT", 600)
+    result = replay_check(folder)
+    # 109 authors' steps of one movable bowl: 06:00-08:00 in the cupboard and 08:10-09:50 on the table agree
+    # (13 + 11); from 10:00 the authors put it back into the cupboard, ours stayed where the person set it down.
+    assert result == {"days": 1, "days_completed": 1, "agreement": round(24 / 109, 4),
+                      "graph_changes_seen": round(2 / 3, 4),
+                      "causes": {"settled elsewhere": 85, "change not seen (+)": 1}, "failed": {}}
+
+
+def test_replay_reports_a_day_that_cannot_run_and_goes_on(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    folder = tmp_path / "scripts_test"
+    folder.mkdir()
+    (folder / "003.txt").write_text(DAY.replace("<bowl> (1001) <table>", "<cup> (1001) <table>"))
+    assert main(["replay", str(folder), "--out", str(tmp_path / "out"), "--household", "H", "--json"]) == 1
+    result = json.loads(capsys.readouterr().out)
+    assert result["days"] == 1 and result["completed"] == 0
+    assert list(result["failed"]) == ["H/test/003"]
+    assert result["failed"]["H/test/003"].endswith("003.txt:19: unknown name 'cup'; closest known: "
+                                                         "cupboard")
+
+
+SHARED = Path(os.environ.get("HOMER_SIM_SHARED", Path(__file__).resolve().parents[3] / "shared")) / "homer_plus"
+ARCHIVE = SHARED / "HouseholdA.tar.gz"
+
+
+@pytest.mark.skipif(not ARCHIVE.is_file(), reason=f"HOMER+ data not found at {SHARED}")
+def test_replay_check_on_two_real_days_names_every_missing_name(tmp_path: Path) -> None:
+    members = ["HouseholdA/processed_seqLM_coarse/common_data.json", "HouseholdA/scripts_train/000.txt",
+               "HouseholdA/processed_seqLM_coarse/train/000.pt", "HouseholdA/scripts_test/000.txt",
+               "HouseholdA/processed_seqLM_coarse/test/000.pt"]
+    with tarfile.open(ARCHIVE) as archive:
+        for member in members:
+            archive.extract(member, tmp_path, filter="data")
+    folder = tmp_path / "HouseholdA"
+    result = replay_check(folder)
+    resolver = default_resolver()
+    lacking = Counter()
+    for script in (folder / "scripts_train" / "000.txt", folder / "scripts_test" / "000.txt"):
+        names = {n for line in script.read_text().splitlines() if line.startswith("[")
+                 for n in re.findall(r"<([^<>]*)>", line)}
+        lacking.update(n for n in names if n not in resolver)
+    assert result["days"] == 2 and result["days_completed"] + len(result["failed"]) == 2
+    if result["failed"]:  # today: toothbrush_holder and more are missing, so no day runs
+        failed_names = Counter({cause.split(": ")[1]: n for cause, n in result["causes"].items()
+                                if cause.startswith("day failed, missing")})
+        assert failed_names == lacking and lacking["toothbrush_holder"] == 2
+        assert all(re.search(r"/\d{3}\.txt:\d+: unknown name '", r) for r in result["failed"].values())
