@@ -39,7 +39,7 @@ log = logging.getLogger(__name__)
 
 OUTSIDE = "outside"  # the room beyond the front door
 NO_FALL_FAMILIES = ("cloth", "sphere")  # shapes with no up to keep
-SNAPSHOTS_BACK = 6  # snapshots searched back from the move for one where the object rests on its source
+REPLAYS = 4  # snapshots (latest first) at which the day is lived again to find the object on its source
 TARGET_OVERALL = 0.97
 TARGET_CLASS = 0.9
 QUICK_SIZE = 6
@@ -145,16 +145,16 @@ class Bench:
 
     def live_until(self, occurrence: Occurrence) -> str | None:
         """Live the occurrence's day up to the last snapshot before the move at which the object rests on its
-        source outside the person's hand; None when found, else why not."""
+        source outside the person's hand (the latest REPLAYS snapshots the recorded day has it there are tried);
+        None when found, else why not."""
         day = self.day(occurrence)
         last = int(occurrence.minute // GRID_MIN) * GRID_MIN
         nodes = self.dataset.meta.nodes
         obj, source = nodes.index(occurrence.obj), nodes.index(occurrence.source)
-        found = f"{occurrence.obj} never rested on {occurrence.source} in the {SNAPSHOTS_BACK} snapshots before"
-        for minute in range(last, last - SNAPSHOTS_BACK * GRID_MIN, -GRID_MIN):
-            step = int(np.searchsorted(day.minutes, minute))
-            if step >= day.steps or day.parent[step, obj] != source:
-                continue
+        found = f"{occurrence.obj} rested on {occurrence.source} at no snapshot of the day before the move"
+        recorded = [int(m) for m, parent in zip(day.minutes, day.parent[:, obj], strict=True)
+                    if m <= last and parent == source]  # where the recorded day has it on its source
+        for minute in recorded[::-1][:REPLAYS]:
             self.generator.replay(occurrence.household, day.replay_key(), day.schedule, executor=self.executor,
                                   end_min=minute)
             graph = self.executor.observer.update()
@@ -188,7 +188,7 @@ def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, des
         return f"pick: {result.reason}"
     result = robot.place(destination)
     if not result.success:
-        return result.reason if result.reason.startswith("place: ") else f"place: {result.reason}"
+        return f"place: {result.reason.removeprefix('place: ')}"
     for part in parts[::-1]:
         result = robot.close_articulation(part)
         if not result.success:
