@@ -254,7 +254,7 @@ def run_suite(quick: bool = False, trials: int | None = None, seed: int = 0, pro
     results: list[TrialResult] = []
     try:
         for cls, name, k in tqdm(runs, desc="grasp suite", unit="trial", disable=not progress, file=sys.stderr):
-            rng = np.random.default_rng([seed, _stable_hash(cls), k])
+            rng = np.random.default_rng([seed, stable_hash(cls), k])
             outcome = run_trial(world, cls, name, rng)
             text = (f"{cls} trial {k}: " + ("ok" if outcome.success else f"FAILED {outcome.reason}")
                     + f" (lift {outcome.lift_m:.3f} m, slip {outcome.slip_m:.4f} m, {outcome.wall_s:.1f} s)")
@@ -270,7 +270,7 @@ def run_suite(quick: bool = False, trials: int | None = None, seed: int = 0, pro
                      {"quick": quick, "seed": seed, "trials_per_class": trials, "rrd": str(rrd) if rrd else None})
 
 
-def _stable_hash(text: str) -> int:
+def stable_hash(text: str) -> int:
     """A process-independent non-negative integer from a string (Python's hash() is salted per process)."""
     return int.from_bytes(text.encode()[:16].ljust(16, b"\0"), "little") % (2**63)
 

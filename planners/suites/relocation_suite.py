@@ -33,7 +33,7 @@ from homer_sim.clock import GRID_MIN
 from homer_sim.data.dataset import Dataset, Day
 from homer_sim.home.catalog import CATALOG
 from planners.suites.collateral import collateral_reason, displaced
-from planners.suites.grasp_suite import _stable_hash
+from planners.suites.grasp_suite import stable_hash
 
 log = logging.getLogger(__name__)
 
@@ -268,7 +268,7 @@ def run_relocations(data: Path, quick: bool = False, seed: int = 0, progress: bo
     started = time.perf_counter()
     results = []
     for occurrence in tqdm(tried, desc="relocation suite", unit="triple", disable=not progress, file=sys.stderr):
-        rng = np.random.default_rng([seed, _stable_hash(occurrence.triple)])
+        rng = np.random.default_rng([seed, stable_hash(occurrence.triple)])
         outcome = run_triple(bench, occurrence, classes[occurrence.obj], rng)
         log.info("%s: %s (%.1f s)", occurrence.triple, "ok" if outcome.success else outcome.reason, outcome.wall_s)
         results.append(outcome)
