@@ -1,44 +1,35 @@
-"""The assisted day: while the person lives their schedule, the robot observes, predicts, plans with Psi and acts.
+"""The robot's turn in the assisted day: relocations asked for at a 10-minute snapshot, carried out in physics.
 
-At every 10-minute snapshot (the executor's `after_tick` hook) the robot reads the observed scene graph, rolls the
-predictor `window_min` ahead, turns the first predicted changes into a plan (`scenarios.psi`) and carries it out
-with its skills in physics. The physics seconds it spends pass on the routine clock: the person's next actions
-wait until the robot is done (they take turns; the robot then drives back to its parking pose, out of the way).
-Failures are kept with the skill's reason and the relocation is not retried within its window.
-
-The reference is the same day replayed without the robot: the same schedule and the same physics random stream in
-an apartment without a robot, so what the person would have moved unassisted is known.
+`Helper.act` orders the relocations into skill calls (`scenarios.psi.plan_steps`: a container is opened before
+it is used and closed after), runs them with the robot's skills and drives the robot back to its parking pose,
+out of the person's way. The physics seconds it spends pass on the routine clock: the person's next actions wait
+until the robot is done (they take turns). Every relocation ends done (the object observed on its destination)
+or not, with the skill's reason; objects the robot displaced more than COLLATERAL_M that no relocation named are
+kept as collateral.
 """
 
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from homer_sim.clock import DEFAULT_WINDOW_MIN
-from homer_sim.errors import HomerError
-from homer_sim.graph import INSIDE, ON, GraphError, SceneGraph
-from homer_sim.home.catalog import CATALOG
-from homer_sim.person.avatar import add_avatar
+from homer_sim.graph import ON, SceneGraph
 from homer_sim.person.executor import DayLog, Executor
-from homer_sim.recording import RecordedWorld
 from homer_sim.world import World
-from planners.grasps.candidate import ungraspable_reason
 from planners.motion.control import FREE_MOTION
 from planners.motion.navigation import NavigationError
-from planners.robot import DEFAULT_POSE, add_robot
+from planners.robot import DEFAULT_POSE
 from planners.skills import Robot, SkillResult
-from scenarios.psi import Holds, Plan, PlanStep, Relocation, psi, unused_help
+from scenarios.psi import PlanStep, Relocation, plan_steps
 
 log = logging.getLogger(__name__)
 
-PERSON_REACH = 0.7  # m from a furniture's footprint within which the person counts as using it
 FALLBACK_PLACES = 3  # places tried to put an object down after a failed place
-ROBOT_MIN_THRESHOLD = 0.5  # the robot acts on a move only when it is more likely than staying: robot time costs
-# routine minutes and a wrong move is worse than a missed one (the tuned threshold may be lower)
+COLLATERAL_M = 0.02  # an object the robot moved farther than this (m) without being asked is collateral
+ROBOT_CLEARANCE_M = 0.55  # the person does not walk within this distance (m) of the robot's base centre
 
 
 @dataclass(frozen=True)
@@ -67,11 +58,11 @@ class RelocationOutcome:
 
 @dataclass
 class AssistLog:
-    """What the robot planned and did over an assisted run, and the person's day as it went."""
+    """What the robot did over an assisted run, and the person's day as it went."""
 
-    plans: list[tuple[int, Plan]] = field(default_factory=list)
     steps: list[StepOutcome] = field(default_factory=list)
     relocations: list[RelocationOutcome] = field(default_factory=list)
+    collateral: list[tuple[int, str, float]] = field(default_factory=list)  # (query minute, object, moved m)
     robot_minutes: float = 0.0
     day: DayLog | None = None
     error: str = ""  # why the person could not go on, if they could not (the run stops there)
@@ -85,88 +76,63 @@ def containers_of(world: World) -> dict[str, tuple[str, ...]]:
     return {k: tuple(v) for k, v in found.items()}
 
 
-class Assistant:
-    """The robot in an apartment with the person: `after_tick` is the executor's hook."""
+class Helper:
+    """The robot in an apartment with the person: `act` carries out relocations at a snapshot."""
 
-    def __init__(self, predictor, window_min: int = DEFAULT_WINDOW_MIN, threshold: float | None = None, recording=None,
-                 rng: np.random.Generator | None = None) -> None:
-        self.world = RecordedWorld(extras=[add_avatar, add_robot])
-        self.world.recording = recording
+    def __init__(self, world: World, executor: Executor, rng: np.random.Generator, recording=None) -> None:
+        self.world = world
+        self.executor = executor
         self.recording = recording
-        self.executor = Executor(self.world, recording=recording)
-        self.executor.dynamic_obstacles = self._robot_cells
-        self.robot = Robot(self.world, rng if rng is not None else np.random.default_rng(0))
-        self.predictor = predictor
-        self.window_min = window_min
-        self.window_steps = window_min // 10
-        tuned = max(float(predictor.params["threshold"]), ROBOT_MIN_THRESHOLD)
-        self.threshold = tuned if threshold is None else float(threshold)
-        self.containers = containers_of(self.world)
-        self.holds = Holds()
-        self.returns: dict[str, Relocation] = {}  # unused help to put back, until tried or the person moves it
-        self.failed: dict[str, tuple[float, str]] = {}  # object -> (retry after minute, reason)
-        self.busy_until = -np.inf
+        self.robot = Robot(world, rng)
+        self.containers = containers_of(world)
         self.log = AssistLog()
+        executor.dynamic_obstacles = self.robot_cells
 
-    # --- the hook -------------------------------------------------------------------------------------------
-    def after_tick(self, minute: int) -> float:
-        """Observe, predict, plan and act at grid minute `minute`; returns the routine minute the robot is done."""
-        if minute < self.busy_until:
-            return self.busy_until
-        day = self.executor.log
-        graph = SceneGraph(self.executor.nodes, self.executor.observer.categories, day.parents[-1], day.relations[-1])
-        carried = set(self.executor.avatar.carried())
-        grabbed_at = self.executor.grabbed_at
-        released = self.holds.update(graph, minute, used=carried, grabbed_at=grabbed_at)
-        self.returns.update({r.obj: r for r in unused_help(released, graph, carried, grabbed_at)})
-        self.returns = {o: r for o, r in self.returns.items() if graph.parent_of(o) == r.source and o not in carried}
-        rollout = self.predictor.rollout(graph.parent[None].astype(np.int64), np.array([minute], dtype=np.float32),
-                                         self.window_steps)
-        self._log_prediction(graph, rollout, minute)
-        open_now = {f for f, parts in self.containers.items() if any(self.world.openness(p) > 0.1 for p in parts)}
-        plan = psi(graph, self.predictor.movable, rollout, threshold=self.threshold, window_steps=self.window_steps,
-                   containers=self.containers, carried=carried, excluded=lambda obj: self._excluded(obj, minute),
-                   holds=self.holds, already_open=open_now, in_use=self._person_at(),
-                   returns=tuple(self.returns.values()))
-        if not plan.relocations:
+    def act(self, relocations: Sequence[Relocation], graph: SceneGraph, movable: np.ndarray, minute: int) -> float:
+        """Carry out `relocations` (in this order) at grid minute `minute`, where `graph` was observed (movable:
+        Shape (N,) bool over its nodes), then park; returns the routine minute the robot is done (`minute` when
+        there is nothing to do)."""
+        if not relocations:
             return float(minute)
-        self.log.plans.append((minute, plan))
+        steps = plan_steps(graph, movable, relocations, self.containers, self.open_containers())
+        before = self.world.object_positions()
         started = float(self.world.data.time)
-        self._carry_out(plan, minute, started)
+        self._carry_out(steps, relocations, minute, started)
         self._park()
+        self._collateral(before, {r.obj for r in relocations}, minute)
         spent = (float(self.world.data.time) - started) / 60.0
         self.log.robot_minutes += spent
-        self.busy_until = minute + spent
-        self._event(f"robot done after {spent:.1f} min", self.busy_until)
-        return self.busy_until
+        self.event(f"robot done after {spent:.1f} min", minute + spent)
+        return minute + spent
 
-    def _excluded(self, obj: str, minute: float) -> str | None:
-        cls = CATALOG[self.world.layout.objects[self.world.object_index(obj)].cls]
-        reason = ungraspable_reason(cls)
-        if reason is not None:
-            return f"not graspable: {reason}"
-        retry_after, why = self.failed.get(obj, (-np.inf, ""))
-        return f"failed earlier ({why}); not retried before {retry_after:.0f} min" if minute < retry_after else None
+    def refuse(self, relocation: Relocation, minute: int, reason: str) -> None:
+        """Record `relocation` as not done for `reason`, without acting (the robot cannot attempt it now)."""
+        self.log.relocations.append(RelocationOutcome(minute, relocation, False, reason, relocation.source))
+
+    def open_containers(self) -> set[str]:
+        """Containers with a door or drawer open more than a tenth."""
+        return {f for f, parts in self.containers.items() if any(self.world.openness(p) > 0.1 for p in parts)}
 
     # --- acting ---------------------------------------------------------------------------------------------
-    def _carry_out(self, plan: Plan, minute: int, started: float) -> None:
-        """Run the plan's steps; a failed open skips what needs that container, a failed pick skips its place."""
+    def _carry_out(self, steps: Sequence[PlanStep], relocations: Sequence[Relocation], minute: int,
+                   started: float) -> None:
+        """Run the steps; a failed open skips what needs that container, a failed pick skips its place."""
         failed_containers: dict[str, str] = {}
         picked: dict[str, SkillResult] = {}
-        by_obj = {r.obj: r for r in plan.relocations}
-        for step in plan.steps:
+        by_obj = {r.obj: r for r in relocations}
+        for step in steps:
             if self.robot.held is not None and step.action != "place":
-                self._event(f"robot stops the plan: it still holds {self.robot.held}", minute, "ERROR")
+                self.event(f"robot stops the plan: it still holds {self.robot.held}", minute, "ERROR")
                 break
             now = minute + (float(self.world.data.time) - started) / 60.0
             if self.recording is not None:
                 self.recording.set_routine_time(now)
-            result = self._run(step, failed_containers, picked, by_obj)
+            result = self._run(step, failed_containers, picked, by_obj, minute)
             if result is None:
                 continue
             self.log.steps.append(StepOutcome(now, step, result.success, result.reason,
                                               float(self.world.data.time) - started))
-            self._event(f"robot {step.action} {step.target}: " + ("ok" if result.success else result.reason), now,
+            self.event(f"robot {step.action} {step.target}: " + ("ok" if result.success else result.reason), now,
                         "INFO" if result.success else "WARN")
             if step.action == "open" and not result.success:
                 failed_containers[step.node] = result.reason
@@ -178,7 +144,7 @@ class Assistant:
                 self._finish(by_obj[step.obj], minute, result.success, result.reason)
 
     def _run(self, step: PlanStep, failed_containers: dict[str, str], picked: dict[str, SkillResult],
-             by_obj: dict[str, Relocation]) -> SkillResult | None:
+             by_obj: dict[str, Relocation], minute: int) -> SkillResult | None:
         """One skill call, or None when the step is skipped because an earlier one failed."""
         if step.action == "open":
             return self.robot.open_articulation(step.target)
@@ -187,7 +153,7 @@ class Assistant:
                 return None
             result = self.robot.close_articulation(step.target)
             if not result.success:  # one more try: a door left open blocks the person
-                self._event(f"robot close {step.target} failed ({result.reason}); trying again", self.executor.minute,
+                self.event(f"robot close {step.target} failed ({result.reason}); trying again", self.executor.minute,
                             "WARN")
                 result = self.robot.close_articulation(step.target)
             return result
@@ -196,7 +162,7 @@ class Assistant:
             if blocked:
                 reason = f"{blocked[0]} did not open ({failed_containers[blocked[0]]})"
                 picked[step.obj] = SkillResult(False, reason)
-                self._finish(by_obj[step.obj], -1, False, reason)
+                self._finish(by_obj[step.obj], minute, False, reason)
                 return None
             return self.robot.pick(step.obj, step.node, into=by_obj[step.obj].destination)
         if not picked.get(step.obj, SkillResult(False)).success:
@@ -214,21 +180,14 @@ class Assistant:
                       if f.name not in self.containers and self.robot.spots.places_of(f.name, ON))
         for node in [source, *(name for _, name in tops)][:FALLBACK_PLACES]:
             if node in self.robot.navigator.furniture and self.robot.place(node).success:
-                self._event(f"robot put {obj} down on {node} after the failed place", self.executor.minute, "WARN")
+                self.event(f"robot put {obj} down on {node} after the failed place", self.executor.minute, "WARN")
                 return
         log.warning("robot still holds %s" if self.robot.held == obj else "%s left the hand on the way", obj)
 
     def _finish(self, relocation: Relocation, minute: int, done: bool, reason: str) -> None:
-        query = minute if minute >= 0 else int(self.log.plans[-1][0])
         graph = self.robot.observer.update()
         ended = graph.parent_of(relocation.obj) or ""
-        self.log.relocations.append(RelocationOutcome(query, relocation, done, reason, ended))
-        if relocation.put_back:  # tried once: if it failed, the predictor decides from now on
-            self.returns.pop(relocation.obj, None)
-        if done and not relocation.put_back:
-            self.holds.add(relocation.obj, ended, query, query + self.window_min, source=relocation.source)
-        elif not done:
-            self.failed[relocation.obj] = (query + self.window_min, reason)
+        self.log.relocations.append(RelocationOutcome(minute, relocation, done, reason, ended))
 
     def _park(self) -> None:
         """Back to the parking pose with the arm tucked, out of the person's way."""
@@ -238,59 +197,25 @@ class Assistant:
         except NavigationError as error:
             log.warning("robot could not park: %s", error)
 
-    def _person_at(self) -> list[str]:
-        """Furniture whose footprint is within PERSON_REACH m of the person (what they may be using now)."""
-        x, y = self.executor.avatar.x, self.executor.avatar.y
-        near = []
-        for f in self.world.layout.furniture:
-            c, s = abs(np.cos(f.yaw)), abs(np.sin(f.yaw))
-            width, depth = f.size[0], f.size[1]  # local x is the depth (out of the front), local y the width
-            half_x, half_y = (c * depth + s * width) / 2, (s * depth + c * width) / 2
-            gap = np.hypot(max(abs(x - f.pos[0]) - half_x, 0.0), max(abs(y - f.pos[1]) - half_y, 0.0))
-            if gap < PERSON_REACH:
-                near.append(f.name)
-        return near
+    def _collateral(self, before: np.ndarray, asked: set[str], minute: int) -> None:
+        """Keep the objects no relocation named that moved more than COLLATERAL_M during the robot's turn."""
+        moved = np.linalg.norm(self.world.object_positions() - before, axis=1)
+        for i in np.flatnonzero(moved > COLLATERAL_M):
+            name = self.world.object_names[i]
+            if name not in asked:
+                self.log.collateral.append((minute, name, round(float(moved[i]), 3)))
+                self.event(f"robot displaced {name} by {moved[i] * 100:.0f} cm", minute, "WARN")
 
-    def _robot_cells(self) -> np.ndarray:
+    def robot_cells(self) -> np.ndarray:
         """Grid cells the person must not walk through: a disk around the robot's base."""
         plan = self.executor.spots.plan
         blocked = np.zeros_like(self.executor.spots.blocked)
         x, y = self.robot.controller.q()[:2]
         xs, ys = plan.cell_centers(0, blocked.shape[0], 0, blocked.shape[1])
-        blocked[np.hypot(xs - x, ys - y) < 0.55] = True
+        blocked[np.hypot(xs - x, ys - y) < ROBOT_CLEARANCE_M] = True
         return blocked
 
-    # --- recording ------------------------------------------------------------------------------------------
-    def _event(self, text: str, minute: float, level: str = "INFO") -> None:
+    def event(self, text: str, minute: float, level: str = "INFO") -> None:
         log.info("%.1f min: %s", minute, text)
         if self.recording is not None:
             self.recording.log_event(text, routine_minute=minute, level=level)
-
-    def _log_prediction(self, graph: SceneGraph, rollout, minute: int) -> None:
-        """The predicted graph at minute + window on `graph/predicted` (when the argmax is an in-tree)."""
-        if self.recording is None:
-            return
-        parent = np.where(self.predictor.movable, rollout.parent[-1, 0], graph.parent)
-        inside = {graph.index(c) for c in self.containers} | {i for i, c in enumerate(graph.categories) if c == "room"}
-        relation = np.where(parent == graph.parent, graph.relation,
-                            np.where(np.isin(parent, list(inside)), INSIDE, ON)).astype(np.int8)
-        try:
-            predicted = SceneGraph(graph.nodes, graph.categories, parent, relation)
-        except GraphError as error:
-            log.info("predicted graph at %d min is no in-tree: %s", minute, error)
-            return
-        self.recording.log_scene_graph(predicted, routine_minute=minute + self.window_min, entity="graph/predicted")
-
-
-def run_assisted(assistant: Assistant, replay: Callable[..., DayLog], end_min: float | None = None) -> AssistLog:
-    """Live a day with the robot's help; returns the robot's log with the person's day in it. `replay` is the
-    day's `Generator.replay` with household, key and entries bound, so the assisted day is the reference day
-    by construction. An action the person cannot carry out (the robot left something in the way, say) ends the
-    run; its reason is kept."""
-    try:
-        replay(executor=assistant.executor, after_tick=assistant.after_tick, end_min=end_min)
-    except HomerError as error:
-        assistant.log.error = str(error)
-        assistant._event(f"the person could not go on: {error}", assistant.executor.minute, "ERROR")
-    assistant.log.day = assistant.executor.log
-    return assistant.log

@@ -12,17 +12,15 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
-from functools import partial
 from pathlib import Path
-
-import numpy as np
 
 from homer_sim.clock import clock_text
 from homer_sim.person.executor import DayLog
-from homer_sim.recording import Recording
-from model.metrics import first_change
-from scenarios.assist import Assistant, AssistLog, run_assisted
+from scenarios.assist import AssistLog
 from scenarios.breakfast_data import DataSpec, check_meta, ensure_dataset, ensure_predictor, make_generator
+from scenarios.policies import PsiPolicy
+from scenarios.scoring import day_result
+from scenarios.task import AssistEnv, AssistTask, DayPlan, run_episode
 
 log = logging.getLogger(__name__)
 
@@ -40,65 +38,6 @@ class Morning:
     index: int = DEMO_DAY[1]
     skip_breakfast: bool = False
     end_min: int | None = MORNING_END_MIN
-
-
-def reference_truth(reference: DayLog, minute: int, obj_index: int, window_steps: int) -> int:
-    """The node index the person first moved object `obj_index` to within (minute, minute + window] in the
-    reference day, or -1 if they did not move it (first change, as model.metrics counts it)."""
-    minutes = np.asarray(reference.minutes)
-    if minute not in minutes:
-        return -1
-    t = int(np.flatnonzero(minutes == minute)[0])
-    parents = np.asarray(reference.parents)
-    future = parents[t + 1 : t + 1 + window_steps]
-    if len(future) == 0:
-        return -1
-    _, destination = first_change(parents[t][None], future[None], np.array([len(future)]))
-    return int(destination[0, obj_index])
-
-
-def fetches(assist: AssistLog, reference: DayLog, rooms: set[str], window_min: int) -> dict:
-    """The person's fetches (in the reference day, each move of an object onto or into furniture) and how many of
-    them the robot had already done: a done relocation of that object to that place within `window_min` before."""
-    moves = [(minute, obj, to) for minute, obj, _, to, _ in reference.moves if to and to not in rooms]
-    done = [(o.minute, o.relocation.obj, o.relocation.destination) for o in assist.relocations if o.done]
-    helped = sum(any(obj == d_obj and to == d_to and minute - window_min <= d_minute <= minute
-                     for d_minute, d_obj, d_to in done) for minute, obj, to in moves)
-    return {"fetches": len(moves), "fetches_done_by_robot": helped,
-            "fetch_share": round(helped / len(moves), 3) if moves else None}
-
-
-def score(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...], window_steps: int) -> dict:
-    """Relocations planned, done, and correct against the reference (done but not correct: wrong), with each
-    one's details."""
-    index = {n: i for i, n in enumerate(nodes)}
-    rows = []
-    for outcome in assist.relocations:
-        r = outcome.relocation
-        truth = reference_truth(reference, outcome.minute, index[r.obj], window_steps)
-        rows.append({"minute": outcome.minute, "object": r.obj, "from": r.source, "to": r.destination,
-                     "confidence": round(r.confidence, 3), "put_back": r.put_back, "done": outcome.done,
-                     "reason": outcome.reason, "ended_on": outcome.ended_on,
-                     "person_unassisted": nodes[truth] if truth >= 0 else None,
-                     "correct": outcome.done and truth == index[r.destination]})
-    skipped = [{"minute": m, "object": r.obj, "to": r.destination, "reason": why}
-               for m, plan in assist.plans for r, why in plan.skipped]
-    return {"relocations_planned": len(rows), "relocations_done": sum(r["done"] for r in rows),
-            "relocations_correct": sum(r["correct"] for r in rows),
-            "relocations_wrong": sum(r["done"] and not r["correct"] for r in rows), "relocations": rows,
-            "skipped": skipped}
-
-
-def end_state(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...]) -> dict:
-    """Where the objects the robot moved are at the end of the run, against where the person alone left them (the
-    reference's last snapshot): tidy-up is judged here, since the paper's metrics count only the person's moves."""
-    index = {n: i for i, n in enumerate(nodes)}
-    moved = sorted({o.relocation.obj for o in assist.relocations if o.done})
-    final, alone = assist.day.parents[-1], reference.parents[-1]
-    elsewhere = {obj: {"assisted": nodes[final[index[obj]]], "unassisted": nodes[alone[index[obj]]]}
-                 for obj in moved if final[index[obj]] != alone[index[obj]]}
-    return {"robot_moved": len(moved), "robot_moved_left_as_unassisted": len(moved) - len(elsewhere),
-            "left_elsewhere": elsewhere}
 
 
 @dataclass(frozen=True)
@@ -122,56 +61,71 @@ def run_full_day(rrd: Path | None, household: str) -> dict:
                                                              household=household)).result
 
 
-def assisted_run(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec | None = None) -> MorningRun:
-    """A day (or its morning) of `spec.household` with the robot helping, scored against the same day without it:
-    the cached dataset and predictor, the reference replay, the assisted run, the recording; keeps the logs."""
+@dataclass(frozen=True)
+class MorningSetup:
+    """The assisted-day environment of a morning, the predictor fitted for its household, and the wall seconds
+    of making them (dataset, predictor)."""
+
+    env: AssistEnv
+    predictor: object
+    nodes: tuple[str, ...]
+    stages_s: dict[str, float]
+
+
+def morning_setup(morning: Morning = Morning(), spec: DataSpec | None = None, recording=None) -> MorningSetup:
+    """The cached dataset and predictor of `spec.household` (made on the first run) and an environment whose
+    episode is the day `morning` names."""
     spec = spec or DataSpec()
-    stages: dict[str, float] = {}
-    clock = time.perf_counter()
-
-    def stage(name: str) -> None:
-        nonlocal clock
-        now = time.perf_counter()
-        stages[name] = round(now - clock, 2)
-        clock = now
-
+    started = time.perf_counter()
     generator = make_generator()
     dataset, generated_s = ensure_dataset(generator, spec)
     check_meta(dataset.meta, generator.world.layout.node_names())
-    stage("dataset (cached)" if generated_s == 0 else "dataset (generated)")
+    stages = {"dataset (cached)" if generated_s == 0 else "dataset (generated)": time.perf_counter() - started}
     predictor, trained_s = ensure_predictor(dataset, spec)
-    stage("predictor (cached)" if trained_s == 0 else "predictor (trained)")
+    stages["predictor (cached)" if trained_s == 0 else "predictor (trained)"] = (
+        time.perf_counter() - started - sum(stages.values()))
+    env = AssistEnv(AssistTask([morning_plan(dataset, morning, spec)], seed=spec.seed,
+                               window_min=spec.window_min, reference=generator, recording=recording))
+    return MorningSetup(env, predictor, dataset.meta.nodes, {k: round(v, 2) for k, v in stages.items()})
 
-    day = dataset.load(spec.household, morning.split)[morning.index]
-    entries = [] if morning.skip_breakfast else [tuple(e) for e in day.schedule]
-    reference = generator.replay(spec.household, day.replay_key(), entries, end_min=morning.end_min)
-    stage("reference replay")
 
+def assisted_run(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec | None = None) -> MorningRun:
+    """A day (or its morning) of `spec.household` with the robot helping, scored against the same day without it:
+    the cached dataset and predictor, the assisted-day environment run by Psi (its reset replays the day without
+    the robot), the recording; keeps the logs."""
+    spec = spec or DataSpec()
     recording = None
     if rrd is not None:
+        from homer_sim.recording import Recording
 
         recording = Recording(rrd)
-    assistant = Assistant(predictor, spec.window_min, recording=recording, rng=np.random.default_rng(spec.seed))
+    setup = morning_setup(morning, spec, recording)
+    env, stages = setup.env, dict(setup.stages_s)
     if recording is not None:
-        recording.log_geometry(assistant.world.model, assistant.world.data)
-    assist = run_assisted(assistant, partial(generator.replay, spec.household, day.replay_key(), entries),
-                          morning.end_min)
-    stage("assisted run")
+        recording.log_geometry(env.task.world.model, env.task.world.data)
+    policy = PsiPolicy(env.scene, setup.predictor, spec.window_min, recording=recording)
+    started = time.perf_counter()
+    episode_return = run_episode(env, policy)
+    stages["assisted run (and its reference replay)"] = round(time.perf_counter() - started, 2)
     if recording is not None:
+        started = time.perf_counter()
         recording.close()
-        stage("recording")
-    result = score(assist, reference, dataset.meta.nodes, spec.window_min // dataset.meta.grid_min)
-    rooms = {n for n, c in zip(dataset.meta.nodes, dataset.meta.categories, strict=True) if c == "room"}
-    result.update(fetches(assist, reference, rooms, spec.window_min))
-    result.update(end_state(assist, reference, dataset.meta.nodes))
+        stages["recording"] = round(time.perf_counter() - started, 2)
+    assist, reference = env.task.log, env.task.reference
+    result = day_result(assist, reference, env.scene.nodes, env.scene.categories, policy.plans, spec.window_min,
+                        until=morning.end_min)
     result.update({"rrd": str(rrd) if rrd is not None else None, "household": spec.household,
-                   "day": f"{morning.split}/{morning.index}", "schedule": [list(e) for e in entries],
-                   "method": spec.method, "threshold": assistant.threshold, "window_min": spec.window_min,
-                   "robot_minutes": round(assist.robot_minutes, 2), "error": assist.error,
-                   "robot_steps": [{"minute": round(s.minute, 2), "action": s.step.action, "target": s.step.target,
-                                    "success": s.success, "reason": s.reason} for s in assist.steps],
-                   "observed_moves": [list(m) for m in assist.day.moves], "stages_s": stages})
-    return MorningRun(result, assist, reference, dataset.meta.nodes)
+                   "day": f"{morning.split}/{morning.index}", "schedule": [list(e) for e in env.task.day.entries],
+                   "method": spec.method, "threshold": policy.threshold, "window_min": spec.window_min,
+                   "return": episode_return, "stages_s": stages})
+    return MorningRun(result, assist, reference, setup.nodes)
+
+
+def morning_plan(dataset, morning: Morning, spec: DataSpec) -> DayPlan:
+    """The day `morning` names in the cached dataset of `spec`, as an episode of the assisted-day task."""
+    day = dataset.load(spec.household, morning.split)[morning.index]
+    entries = () if morning.skip_breakfast else tuple(tuple(e) for e in day.schedule)
+    return DayPlan(spec.household, day.replay_key(), entries, morning.end_min)
 
 
 def format_summary(result: dict) -> list[str]:

@@ -179,47 +179,63 @@ def anchor_of(graph: SceneGraph, movable: np.ndarray, node: str) -> str:
 def plan_relocations(graph: SceneGraph, movable: np.ndarray, relocations: Sequence[Relocation],
                      containers: Mapping[str, Sequence[str]], skip: Callable[[Relocation], str | None],
                      already_open: Collection[str] = ()) -> Plan:
-    """Order relocations into robot steps, leaving out those `skip` gives a reason for.
+    """Order relocations into robot steps, leaving out those `skip` gives a reason for and those whose
+    destination the robot cannot place on.
 
-    containers: furniture name -> its articulations (`<furniture>/<part>`); every part of a container is opened
-    before the first relocation that takes from or puts into it and closed after the last one (only containers
-    the plan opened: those in `already_open` stay as the person left them). Relocations run in order of their
-    first predicted step, grouped by container; an object headed into another relocated object goes after it.
+    Relocations run in order of their first predicted step, grouped by the furniture they are taken from; an
+    object headed into another relocated object goes after it. The steps are `plan_steps` of that order.
     """
     movable = np.asarray(movable, dtype=bool)
     kept, skipped = [], []
     for relocation in relocations:
-        reason = skip(relocation)
-        category = graph.categories[graph.index(relocation.destination)]
-        if reason is None and category not in PLACEABLE_CATEGORIES:
-            reason = (f"destination {relocation.destination} is a {category}; the robot places only on "
-                      f"{' or '.join(PLACEABLE_CATEGORIES)}")
+        reason = skip(relocation) or unplaceable(graph, relocation.destination)
         if reason is None:
             kept.append(relocation)
         else:
             skipped.append((relocation, reason))
+    kept.sort(key=lambda r: (r.steps_ahead, anchor_of(graph, movable, r.source), r.obj))
+    moving = {r.obj for r in kept}
+    kept.sort(key=lambda r: r.destination in moving)  # stable: objects headed into moved objects go last
+    return Plan(tuple(kept), tuple(skipped), plan_steps(graph, movable, kept, containers, already_open))
+
+
+def unplaceable(graph: SceneGraph, destination: str) -> str | None:
+    """Why the robot cannot place on `destination` (None if it can: furniture and appliances)."""
+    category = graph.categories[graph.index(destination)]
+    if category in PLACEABLE_CATEGORIES:
+        return None
+    return f"destination {destination} is a {category}; the robot places only on {' or '.join(PLACEABLE_CATEGORIES)}"
+
+
+def plan_steps(graph: SceneGraph, movable: np.ndarray, relocations: Sequence[Relocation],
+               containers: Mapping[str, Sequence[str]], already_open: Collection[str] = ()) -> tuple[PlanStep, ...]:
+    """The robot steps that make `relocations` in the order given: pick at the object's furniture, place on the
+    destination.
+
+    containers: furniture name -> its articulations (`<furniture>/<part>`); every part of a container is opened
+    before the first relocation that takes from or puts into it and closed after the last one (only containers
+    the plan opened: those in `already_open` stay as the person left them).
+    """
+    movable = np.asarray(movable, dtype=bool)
 
     def used_containers(r: Relocation) -> list[str]:
         ends = (anchor_of(graph, movable, r.source), r.destination)
         return [c for c in dict.fromkeys(ends) if c in containers]
 
-    kept.sort(key=lambda r: (r.steps_ahead, anchor_of(graph, movable, r.source), r.obj))
-    moving = {r.obj for r in kept}
-    kept.sort(key=lambda r: r.destination in moving)  # stable: objects headed into moved objects go last
     steps: list[PlanStep] = []
     opened: list[str] = []
-    for k, r in enumerate(kept):
+    for k, r in enumerate(relocations):
         for container in used_containers(r):
             if container not in opened and container not in already_open:
                 steps += [PlanStep("open", part, container) for part in containers[container]]
                 opened.append(container)
         source_anchor = anchor_of(graph, movable, r.source)
         steps += [PlanStep("pick", r.obj, source_anchor, r.obj), PlanStep("place", r.destination, r.destination, r.obj)]
-        later = {c for rest in kept[k + 1 :] for c in used_containers(rest)}
+        later = {c for rest in relocations[k + 1 :] for c in used_containers(rest)}
         for container in [c for c in opened if c not in later][::-1]:
             steps += [PlanStep("close", part, container) for part in containers[container]][::-1]
             opened.remove(container)
-    return Plan(tuple(kept), tuple(skipped), tuple(steps))
+    return tuple(steps)
 
 
 def psi(graph: SceneGraph, movable: np.ndarray, rollout: Rollout, *, threshold: float, window_steps: int,

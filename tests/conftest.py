@@ -3,15 +3,20 @@
 Compiling the apartment takes about a second; tests that only need the world as declared share one, reset to
 its start layout before each test (`world`). Markers: `slow` for the long suites (opt in with `-m slow`) and
 `physics` for tests that step a whole apartment for seconds or more (deselect with `-m "not physics"`).
+MuJoCo renders offscreen (EGL) unless the caller chose another GL backend: set before mujoco is first imported.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
+import os
 
-import pytest
+os.environ.setdefault("MUJOCO_GL", "egl")
 
-from homer_sim.world import World
+from pathlib import Path  # noqa: E402
+
+import pytest  # noqa: E402
+
+from homer_sim.world import World  # noqa: E402
 
 REPO = Path(__file__).resolve().parent.parent
 SHARED = REPO.parent / "shared"

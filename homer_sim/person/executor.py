@@ -242,40 +242,70 @@ class Executor:
         after_tick: called after each snapshot with its grid minute (a robot acting, for instance); returns the
         routine minute its work ends, and actions due before then wait until then. end_min: stop after the
         snapshot at this minute (default: the whole day)."""
+        events, last = self.begin_day(entries, scripts, rng)
+        return self.live(events, last, after_tick, end_min)
+
+    def begin_day(self, entries, scripts: Mapping, rng: np.random.Generator) -> tuple[list, float]:
+        """Start the day of `entries` (see `run_day`); returns its timed events, (routine minute, activity,
+        action) in time order, and the last minute its snapshots reach (before rounding up to the grid)."""
         self.start_day(rng)
         events = []
         for activity, start, end in entries:
             events += [(t, activity, a) for t, a in timed_actions(scripts[activity], start, end, rng)]
             self.log.schedule.append((activity, float(start), float(end)))
-        last = max([DAY_END_MIN] + [end for _, _, end in entries])
-        return self.live(events, last, after_tick, end_min)
+        return events, max([DAY_END_MIN] + [end for _, _, end in entries])
 
     def live(self, events, last: float, after_tick: Callable[[int], float] | None = None,
              end_min: float | None = None, after_action: Callable[[int], None] | None = None) -> DayLog:
         """Carry out `events`, (routine minute, activity, action) in time order, on a day already started, with a
         snapshot every GRID_MIN minutes up to `last` (rounded up to the grid). after_tick and end_min as in
         `run_day`; after_action: called with each event's index once it is done."""
-        grid = range(DAY_START_MIN, int(math.ceil(last / GRID_MIN)) * GRID_MIN + 1, GRID_MIN)
-        pending = iter(enumerate(events))
-        event = next(pending, None)
-        current, free_at = None, -math.inf
-        for minute in grid:
-            if end_min is not None and minute > end_min:
-                break
-            while event is not None and event[1][0] < minute:
-                index, (at, activity, action) = event
-                self.minute = max(at, free_at)
-                if activity != current and self.recording is not None:
-                    self.recording.log_event(f"{activity} starts", routine_minute=at)
-                current = activity
-                self._perform(activity, action)
-                if after_action is not None:
-                    after_action(index)
-                event = next(pending, None)
-            self.tick(minute)
+        day = DayRun(self, events, last, end_min, after_action)
+        free_at = -math.inf
+        while (minute := day.advance(free_at)) is not None:
             if after_tick is not None:
                 free_at = after_tick(minute)
         return self.log
+
+
+class DayRun:
+    """A started day lived tick by tick: `advance` carries out the actions due before the next grid minute and
+    takes its snapshot, so a caller (the assisted-day task) can act between snapshots. `Executor.live` is this
+    loop."""
+
+    def __init__(self, executor: Executor, events, last: float, end_min: float | None = None,
+                 after_action: Callable[[int], None] | None = None) -> None:
+        """events, last, end_min and after_action as in `Executor.live`; no action is carried out yet."""
+        self.executor = executor
+        grid = range(DAY_START_MIN, int(math.ceil(last / GRID_MIN)) * GRID_MIN + 1, GRID_MIN)
+        self.grid = [m for m in grid if end_min is None or m <= end_min]  # routine minutes of the snapshots
+        self.ended_early = len(self.grid) < len(grid)  # end_min cut the day short
+        self.after_action = after_action
+        self._pending = iter(enumerate(events))
+        self._event = next(self._pending, None)
+        self._current: str | None = None
+        self._next = 0
+
+    def advance(self, free_at: float = -math.inf) -> int | None:
+        """Carry out the actions due before the next grid minute (none starts before routine minute `free_at`)
+        and take that minute's snapshot; returns the minute, or None when the day is over."""
+        if self._next >= len(self.grid):
+            return None
+        minute = self.grid[self._next]
+        self._next += 1
+        executor = self.executor
+        while self._event is not None and self._event[1][0] < minute:
+            index, (start, activity, action) = self._event
+            executor.minute = max(start, free_at)
+            if activity != self._current and executor.recording is not None:
+                executor.recording.log_event(f"{activity} starts", routine_minute=start)
+            self._current = activity
+            executor._perform(activity, action)
+            if self.after_action is not None:
+                self.after_action(index)
+            self._event = next(self._pending, None)
+        executor.tick(minute)
+        return minute
 
 
 def timed_actions(script, start: float, end: float, rng: np.random.Generator) -> list[tuple[float, object]]:

@@ -8,6 +8,8 @@ import pytest
 from homer_sim.days import DayKey
 from scenarios.breakfast_data import DataSpec, ensure_dataset, make_generator
 
+pytestmark = pytest.mark.physics  # steps a whole apartment for seconds or more
+
 
 @pytest.fixture(scope="module")
 def household_b_day(tmp_path_factory: pytest.TempPathFactory):

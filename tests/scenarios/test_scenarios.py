@@ -16,10 +16,13 @@ from homer_sim.person.executor import DayLog
 from homer_sim.person.households import load_households
 from homer_sim.recording import read_recording
 from scenarios.assist import AssistLog, RelocationOutcome
-from scenarios.breakfast import Morning, MorningRun, assisted_run, end_state, fetches
+from scenarios.breakfast import Morning, MorningRun, assisted_run
 from scenarios.breakfast_data import DataSpec
 from scenarios.psi import Relocation
 from scenarios.registry import SCENARIOS, get
+from scenarios.scoring import end_state, fetches
+
+pytestmark = pytest.mark.physics  # steps a whole apartment for seconds or more
 
 ITEMS = ("food_cereal", "milk", "bowl")
 TABLE = "table_dining_room"

@@ -15,6 +15,8 @@ from homer_sim.person.aliases import default_resolver
 from homer_sim.person.households import ACTIVITIES
 from homer_sim.person.scripts import Script, SymbolicResult, symbolic_run
 
+pytestmark = pytest.mark.physics  # steps a whole apartment for seconds or more
+
 TWO_VARIANTS = {"breakfast", "lunch", "dinner", "brushing_teeth", "showering", "getting_dressed", "computer_work",
                 "watching_tv", "reading", "wash_dishes", "leave_home", "come_home"}
 DURATION_BOUNDS = {  # activity -> (lowest allowed min, highest allowed max), routine minutes

@@ -13,6 +13,8 @@ from homer_sim.person.executor import Executor
 from homer_sim.person.scripts import symbolic_run
 from homer_sim.world import World
 
+pytestmark = pytest.mark.physics  # steps a whole apartment for seconds or more
+
 
 @pytest.fixture(scope="module")
 def executor() -> Executor:

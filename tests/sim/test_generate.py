@@ -15,6 +15,8 @@ from homer_sim.data.stats import dataset_stats
 from homer_sim.days import DayKey
 from homer_sim.errors import HomerError
 
+pytestmark = pytest.mark.physics  # steps a whole apartment for seconds or more
+
 REFERENCE = Path(__file__).resolve().parents[3] / "shared" / "homer_reference"
 
 

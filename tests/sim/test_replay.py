@@ -21,6 +21,8 @@ from homer_sim.person.day_scripts import GraphChange, parse_day_script
 from homer_sim.person.scripts import ScriptError
 from scenarios.cli.main import main
 
+pytestmark = pytest.mark.physics  # steps a whole apartment for seconds or more
+
 DAY = """breakfast (08:00 - 08:20)
 watching_tv (08:20 - 1day - 00:40)
 

@@ -1,0 +1,99 @@
+"""`homer assist-eval` on a tiny dataset made here (1 household, 2 training days, 1 test day), up to 06:30: the
+oracle sets the breakfast table at 06:00 for the person's 06:25 breakfast."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from homer_sim.data.generate import generate
+from scenarios.assist_eval import markdown_table, summarise
+from scenarios.causes import CAUSES, OTHER, cause_of
+from scenarios.cli.main import main
+from scenarios.env import run_episode
+from scenarios.episodes import make_setup
+from scenarios.policies import EmptyPolicy
+from scenarios.scoring import day_result
+
+pytestmark = pytest.mark.physics  # steps a whole apartment for seconds or more
+
+UNTIL = 390  # 06:30
+KEYS = {"relocations_planned", "relocations_done", "relocations_correct", "relocations_wrong", "fetches",
+        "fetches_done_by_robot", "fetch_share", "collateral", "days", "wall_s_per_day"}
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("tiny") / "data"
+    generate(out, 1, 2, 1, seed=0, progress=False)
+    return out
+
+
+def test_the_oracle_day_adds_up_and_beats_an_empty_plan(data: Path, tmp_path: Path,
+                                                       capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "oracle"
+    status = main(["assist-eval", "--data", str(data), "--method", "oracle", "--until", str(UNTIL), "--out", str(out),
+                   "--quiet", "--json"])
+    assert status == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["method"] == "oracle" and set(result["per_household"]) == {"household_a"}
+    for row in (result["total"], result["per_household"]["household_a"]):
+        assert KEYS <= set(row)
+        not_done = row["relocations_planned"] - row["relocations_done"]
+        assert not_done == sum(result["failures"].values()), result  # every relocation not done has a cause
+        assert row["relocations_correct"] + row["relocations_wrong"] == row["relocations_done"]
+    total = result["total"]
+    assert total["days"] == 1 and total["fetches"] >= 4
+    assert total["fetches_done_by_robot"] >= 2, result  # the oracle set out breakfast before the person came
+    assert {p.name for p in out.iterdir()} >= {"assist_eval.json", "assist_eval.md", "assist_eval.png", "days"}
+    assert "| household_a |" in (out / "assist_eval.md").read_text()
+
+    # The same day with nothing asked of the robot: no fetch made ahead, nothing moved.
+    setup = make_setup("dataset_day", data=str(data), household="household_a", end_min=UNTIL)
+    assert run_episode(setup.env, EmptyPolicy(setup.env.scene)) == 0.0
+    task = setup.env.task
+    empty = day_result(task.log, task.reference, task.scene.nodes, task.scene.categories, (), 30,
+                       until=UNTIL)
+    assert empty["fetches"] == total["fetches"] and empty["fetches_done_by_robot"] == 0
+    day = json.loads((out / "days" / "household_a_000.json").read_text())
+    assert day["return"] == total["fetches_done_by_robot"] - total["relocations_wrong"] > 0
+
+
+def test_unknown_households_are_named_with_the_known_ones(data: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["assist-eval", "--data", str(data), "--households", "household_z", "--method", "oracle",
+                 "--quiet"]) == 2
+    assert "household_a" in capsys.readouterr().err
+
+
+def test_failure_reasons_are_grouped_by_cause() -> None:
+    reasons = {
+        "place: clothes_dress fell out of the hand while carried": "fell out of the hand",
+        "water_bottle: it has fallen over (lies on its side), and no grasp fits it so": "lies fallen over",
+        "place: water_bottle ended ON table_home_office, not on bookshelf_home_office": "ended elsewhere",
+        "place: no free base pose puts drinking_glass into dishwasher without it or the arm": "no free base pose",
+        "cupboard did not open (open cupboard/left: openness 0.42, below 0.9)": "container did not open",
+        "place: fork fell over on sink_dining_room": "fell over on the destination",
+        "something new": OTHER,
+    }
+    assert {reason: cause_of(reason) for reason in reasons} == reasons
+    assert set(reasons.values()) <= set(CAUSES)
+
+
+def test_totals_add_days_up_and_take_the_median_wall_time() -> None:
+    def day(household: str, planned: int, done: int, correct: int, fetches: int, helped: int, wall: float) -> dict:
+        return {"household": household, "relocations_planned": planned, "relocations_done": done,
+                "relocations_correct": correct, "relocations_wrong": done - correct, "fetches": fetches,
+                "fetches_done_by_robot": helped, "collateral": 1, "robot_minutes": 2.0, "wall_s": wall,
+                "error": "", "failures": {"no path": planned - done}}
+
+    days = [day("a", 4, 3, 2, 10, 2, 30.0), day("a", 2, 2, 2, 10, 1, 50.0), day("b", 1, 0, 0, 5, 0, 10.0)]
+    summary = summarise("markov", days, ["a", "b"])
+    assert summary["per_household"]["a"] == {
+        "relocations_planned": 6, "relocations_done": 5, "relocations_correct": 4, "relocations_wrong": 1,
+        "fetches": 20, "fetches_done_by_robot": 3, "collateral": 2, "fetch_share": 0.15, "days": 2,
+        "robot_minutes": 4.0, "wall_s_per_day": 40.0, "person_stopped": 0}
+    assert summary["total"]["fetch_share"] == 0.12 and summary["total"]["wall_s_per_day"] == 30.0
+    assert summary["failures"] == {"no path": 2}
+    assert "| a | 2 | 6 | 5 | 4 | 1 |" in markdown_table(summary)
