@@ -6,8 +6,9 @@ the suite, not the robot: the apartment's settled start state, the doors or draw
 the object moved to its trial pose, the robot tucked in front of the furniture. From there on only physics
 moves anything. A trial succeeds when the object is at least MIN_LIFT m above its start, stays there for
 HOLD_SECONDS of physics, and slips less than MAX_SLIP m relative to the grip site meanwhile (no MuJoCo warning
-or NaN either). Classes that `planners.grasps.candidate.ungraspable_reason` rejects are listed as excluded, with that
-reason.
+or NaN either), and no other object moved more than `planners.suites.collateral.MAX_DISPLACEMENT` (a pick that
+knocks a neighbour off its shelf is a failure, counted as `collateral`). Classes that
+`planners.grasps.candidate.ungraspable_reason` rejects are listed as excluded, with that reason.
 
 mujoco and the planners that need it are imported inside the functions that run trials, so `homer --help`
 stays fast.
@@ -28,6 +29,7 @@ import numpy as np
 from homer_sim.graph import INSIDE
 from homer_sim.home.apartment import default_layout
 from homer_sim.home.catalog import CATALOG, FAMILIES
+from planners.suites.collateral import collateral_reason, displaced
 
 if TYPE_CHECKING:
     from homer_sim.world import World
@@ -60,6 +62,7 @@ class TrialResult:
     lift_m: float
     slip_m: float
     wall_s: float
+    collateral: bool = False  # an otherwise successful pick that moved another object (`suites.collateral`)
 
 
 def suite_classes() -> tuple[dict[str, str], dict[str, str]]:
@@ -201,13 +204,14 @@ def run_trial(world: World, cls: str, name: str, rng: np.random.Generator) -> Tr
         return TrialResult(cls, False, f"set-up: {error}", 0.0, math.nan, time.perf_counter() - started)
     world.settle(max_seconds=2.0)
     robot.observer.observe_all()
+    before = world.object_positions()
     start_z = float(world.object_pose(name)[0][2])
     parent = world.layout.objects[world.object_index(name)].parent
     picked = robot.pick(name, parent if parent in robot.navigator.furniture else None)
     lift = float(world.object_pose(name)[0][2]) - start_z
 
-    def result(success: bool, reason: str, slip: float = math.nan) -> TrialResult:
-        return TrialResult(cls, success, reason, lift, slip, time.perf_counter() - started)
+    def result(success: bool, reason: str, slip: float = math.nan, collateral: bool = False) -> TrialResult:
+        return TrialResult(cls, success, reason, lift, slip, time.perf_counter() - started, collateral)
 
     if not picked.success:
         return result(False, picked.reason)
@@ -221,7 +225,8 @@ def run_trial(world: World, cls: str, name: str, rng: np.random.Generator) -> Tr
         return result(False, f"lifted {lift * 100:.1f} cm, below {MIN_LIFT * 100:.0f} cm", slip)
     if slip > MAX_SLIP:
         return result(False, f"slipped {slip * 1000:.1f} mm in {HOLD_SECONDS:.0f} s", slip)
-    return result(True, "", slip)
+    found = displaced(world, before, skip={name})
+    return result(False, collateral_reason(found), slip, True) if found else result(True, "", slip)
 
 
 # --- the suite ------------------------------------------------------------------------------------------
@@ -249,7 +254,7 @@ def run_suite(quick: bool = False, trials: int | None = None, seed: int = 0, pro
     results: list[TrialResult] = []
     try:
         for cls, name, k in tqdm(runs, desc="grasp suite", unit="trial", disable=not progress, file=sys.stderr):
-            rng = np.random.default_rng([seed, _stable_hash(cls), k])
+            rng = np.random.default_rng([seed, stable_hash(cls), k])
             outcome = run_trial(world, cls, name, rng)
             text = (f"{cls} trial {k}: " + ("ok" if outcome.success else f"FAILED {outcome.reason}")
                     + f" (lift {outcome.lift_m:.3f} m, slip {outcome.slip_m:.4f} m, {outcome.wall_s:.1f} s)")
@@ -265,7 +270,7 @@ def run_suite(quick: bool = False, trials: int | None = None, seed: int = 0, pro
                      {"quick": quick, "seed": seed, "trials_per_class": trials, "rrd": str(rrd) if rrd else None})
 
 
-def _stable_hash(text: str) -> int:
+def stable_hash(text: str) -> int:
     """A process-independent non-negative integer from a string (Python's hash() is salted per process)."""
     return int.from_bytes(text.encode()[:16].ljust(16, b"\0"), "little") % (2**63)
 
@@ -273,7 +278,8 @@ def _stable_hash(text: str) -> int:
 def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: int, wall_s: float,
               extra: dict) -> dict:
     """The `grasp-suite` JSON object from trial results: `trials`, `overall`, `per_class` and `excluded` keep
-    their meaning for scripts; failure reasons per class and timing are extra keys."""
+    their meaning for scripts; `collateral` counts the trials failed only because another object moved; failure
+    reasons per class and timing are extra keys."""
     per_class: dict[str, dict] = {}
     for r in results:
         entry = per_class.setdefault(r.cls, {"trials": 0, "successes": 0, "failures": [],
@@ -290,6 +296,7 @@ def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: i
     return {
         "trials": len(results),
         "overall": successes / len(results) if results else 0.0,
+        "collateral": sum(r.collateral for r in results),
         "per_class": per_class,
         "excluded": dict(excluded),
         "classes": n_classes,
