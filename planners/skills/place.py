@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from homer_sim.errors import HomerError
 from homer_sim.graph import INSIDE, RELATION_NAMES
 from homer_sim.home.catalog import CATALOG
 from homer_sim.home.spots import Spots
@@ -48,6 +49,10 @@ class Place:
         name = self.arm.held
         if name is None:
             return SkillResult(False, "place: the robot holds nothing")
+        if node in self.world.layout.room_names():
+            return self._place_on_floor(name, node)
+        if node in self.world.object_names:
+            return self._place_on_object(name, node)
         shelves = shelves_inside(self.spots, self.navigator.furniture.get(node), node, relation)
         if shelves:
             return self._place_in_shelf(name, node, shelves)
@@ -61,6 +66,49 @@ class Place:
         target = np.array(spot.pos)
         failure, short = self._carry_to(name, node, target)
         return failure if failure is not None else self._lower_onto(name, node, target, short)
+
+    def _place_on_floor(self, name: str, room: str) -> SkillResult:
+        """Put the held `name` on a free spot of the floor of `room`: near the robot when it is in that room,
+        else near the room's centre; lowered from above."""
+        here = self.controller.q()[:2]
+        rect = next(r.rect for r in self.world.layout.rooms if r.name == room)
+        near = here if self.world.layout.room_at(*here) == room else ((rect[0] + rect[2]) / 2, (rect[1] + rect[3]) / 2)
+        try:
+            spot = self.spots.floor_spot(name, room, tuple(near), self.rng, {self.world.object_index(name)})
+        except HomerError as error:
+            return SkillResult(False, f"place: {error}")
+        return self._down_at(name, room, room, np.array(spot.pos))
+
+    def _place_on_object(self, name: str, node: str) -> SkillResult:
+        """Put the held `name` on (into, for a bin) object `node`, which supports others: centred over it, at
+        the height it lands on what is there (its top, its floor or the pile in it)."""
+        cls = CATALOG[self.world.layout.objects[self.world.object_index(node)].cls]
+        if not cls.supports:
+            return SkillResult(False, f"place: {node} is an object nothing rests on")
+        position = self.world.object_pose(node)[0]
+        size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        try:
+            z = self.spots.landing_z(name, tuple(position[:2]), position[2] + cls.size[2] / 2 + size[2] + 0.05)
+        except HomerError as error:
+            return SkillResult(False, f"place: {error}")
+        graph = self.observer.update()
+        anchor = node
+        while anchor in self.world.object_names and graph.parent_of(anchor):
+            anchor = graph.parent_of(anchor)
+        return self._down_at(name, node, anchor, np.array([position[0], position[1], z]))
+
+    def _down_at(self, name: str, node: str, anchor: str, target: np.ndarray) -> SkillResult:
+        """Carry `name` to stand at `anchor` (furniture: in front of it; a room: near `target` on the floor) and
+        lower it onto `target` (m) on `node`."""
+        if anchor in self.navigator.furniture:
+            failure, short = self._carry_to(name, anchor, target)
+            return failure if failure is not None else self._lower_onto(name, node, target, short)
+        try:
+            self.navigator.drive_to(self.navigator.stand_near(tuple(target[:2])), self.arm.carry(),
+                                    self.arm.held_reach(), **CARRY_MOTION)
+        except HomerError as error:
+            return SkillResult(False, f"place: {error}")
+        return self._lower_onto(name, node, target, short=False)
 
     def _carry_to(self, name: str, node: str, target: np.ndarray) -> tuple[SkillResult | None, bool]:
         """Carry `name` to a base pose in front of furniture `node` facing `target` (m, the spot it goes to; see

@@ -6,8 +6,9 @@ the suite, not the robot: the apartment's settled start state, the doors or draw
 the object moved to its trial pose, the robot tucked in front of the furniture. From there on only physics
 moves anything. A trial succeeds when the object is at least MIN_LIFT m above its start, stays there for
 HOLD_SECONDS of physics, and slips less than MAX_SLIP m relative to the grip site meanwhile (no MuJoCo warning
-or NaN either). Classes that `planners.grasps.candidate.ungraspable_reason` rejects are listed as excluded, with that
-reason.
+or NaN either), and no other object moved more than `planners.suites.collateral.MAX_DISPLACEMENT` (a pick that
+knocks a neighbour off its shelf is a failure, counted as `collateral`). Classes that
+`planners.grasps.candidate.ungraspable_reason` rejects are listed as excluded, with that reason.
 
 mujoco and the planners that need it are imported inside the functions that run trials, so `homer --help`
 stays fast.
@@ -30,6 +31,7 @@ from homer_sim.execution import IN_PROCESS, Backend
 from homer_sim.graph import INSIDE
 from homer_sim.home.apartment import default_layout
 from homer_sim.home.catalog import CATALOG, FAMILIES
+from planners.suites.collateral import collateral_reason, displaced
 
 if TYPE_CHECKING:
     from homer_sim.recording import RecordedWorld
@@ -63,6 +65,7 @@ class TrialResult:
     lift_m: float
     slip_m: float
     wall_s: float
+    collateral: bool = False  # an otherwise successful pick that moved another object (`suites.collateral`)
     trial: int = 0
 
 
@@ -203,13 +206,14 @@ def run_trial(world: World, cls: str, name: str, rng: np.random.Generator) -> Tr
         return TrialResult(cls, False, f"set-up: {error}", 0.0, math.nan, time.perf_counter() - started)
     world.settle(max_seconds=2.0)
     robot.observer.observe_all()
+    before = world.object_positions()
     start_z = float(world.object_pose(name)[0][2])
     parent = world.layout.objects[world.object_index(name)].parent
     picked = robot.pick(name, parent if parent in robot.navigator.furniture else None)
     lift = float(world.object_pose(name)[0][2]) - start_z
 
-    def result(success: bool, reason: str, slip: float = math.nan) -> TrialResult:
-        return TrialResult(cls, success, reason, lift, slip, time.perf_counter() - started)
+    def result(success: bool, reason: str, slip: float = math.nan, collateral: bool = False) -> TrialResult:
+        return TrialResult(cls, success, reason, lift, slip, time.perf_counter() - started, collateral)
 
     if not picked.success:
         return result(False, picked.reason)
@@ -223,7 +227,8 @@ def run_trial(world: World, cls: str, name: str, rng: np.random.Generator) -> Tr
         return result(False, f"lifted {lift * 100:.1f} cm, below {MIN_LIFT * 100:.0f} cm", slip)
     if slip > MAX_SLIP:
         return result(False, f"slipped {slip * 1000:.1f} mm in {HOLD_SECONDS:.0f} s", slip)
-    return result(True, "", slip)
+    found = displaced(world, before, skip={name})
+    return result(False, collateral_reason(found), slip, True) if found else result(True, "", slip)
 
 
 # --- the suite ------------------------------------------------------------------------------------------
@@ -242,7 +247,7 @@ def suite_trial(world: RecordedWorld, run: tuple[str, str, int, int]) -> TrialRe
     its random stream comes from (seed, class, k) alone. A recording world gets the outcome as an event and
     its physics clock moved past the trial."""
     cls, name, seed, k = run
-    outcome = replace(run_trial(world, cls, name, np.random.default_rng([seed, _stable_hash(cls), k])), trial=k)
+    outcome = replace(run_trial(world, cls, name, np.random.default_rng([seed, stable_hash(cls), k])), trial=k)
     if world.recording is not None:
         world.recording.log_event(describe(outcome), level="INFO" if outcome.success else "WARN")
         world.physics_offset += float(world.data.time)
@@ -296,7 +301,7 @@ def run_suite(quick: bool = False, trials: int | None = None, seed: int = 0, pro
                       "execution": trial_runs.usage()})
 
 
-def _stable_hash(text: str) -> int:
+def stable_hash(text: str) -> int:
     """A process-independent non-negative integer from a string (Python's hash() is salted per process)."""
     return int.from_bytes(text.encode()[:16].ljust(16, b"\0"), "little") % (2**63)
 
@@ -304,7 +309,8 @@ def _stable_hash(text: str) -> int:
 def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: int, wall_s: float,
               extra: dict) -> dict:
     """The `grasp-suite` JSON object from trial results: `trials`, `overall`, `per_class` and `excluded` keep
-    their meaning for scripts; failure reasons per class, every trial's outcome and timing are extra keys."""
+    their meaning for scripts; `collateral` counts the trials failed only because another object moved; failure
+    reasons per class, every trial's outcome and timing are extra keys."""
     per_class: dict[str, dict] = {}
     for r in results:
         entry = per_class.setdefault(r.cls, {"trials": 0, "successes": 0, "failures": [],
@@ -321,6 +327,7 @@ def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: i
     return {
         "trials": len(results),
         "overall": successes / len(results) if results else 0.0,
+        "collateral": sum(r.collateral for r in results),
         "per_class": per_class,
         "excluded": dict(excluded),
         "classes": n_classes,
@@ -330,7 +337,8 @@ def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: i
         and min(rates) >= TARGET_CLASS,
         "median_trial_wall_s": float(np.median([r.wall_s for r in results])) if results else 0.0,
         "results": [{"class": r.cls, "trial": r.trial, "success": r.success, "reason": r.reason, "lift_m": r.lift_m,
-                     "slip_m": None if math.isnan(r.slip_m) else r.slip_m} for r in results],
+                     "slip_m": None if math.isnan(r.slip_m) else r.slip_m, "collateral": r.collateral}
+                    for r in results],
         "wall_s": wall_s,
         **extra,
     }

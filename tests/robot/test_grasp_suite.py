@@ -50,9 +50,10 @@ def test_chosen_classes_name_their_instances_and_refuse_unknown_or_excluded_ones
 def test_summary_counts_trials_and_rates() -> None:
     results = [TrialResult("bowl", True, "", 0.15, 0.001, 1.0), TrialResult("bowl", False, "missed", 0.0,
                                                                              np.nan, 1.0),
-               TrialResult("mug", True, "", 0.14, 0.0, 1.0)]
+               TrialResult("mug", True, "", 0.14, 0.0, 1.0),
+               TrialResult("mug", False, "collateral: moved cup 3.0 cm", 0.14, 0.0, 1.0, collateral=True)]
     summary = summarise(results, {"plate": "wide"}, 3, 3.0, {})
-    assert summary["trials"] == 3 and summary["overall"] == pytest.approx(2 / 3)
+    assert summary["trials"] == 4 and summary["overall"] == pytest.approx(2 / 4) and summary["collateral"] == 1
     assert summary["per_class"]["bowl"] == {"trials": 2, "successes": 1, "failures": ["missed"], "family": "bowl",
                                             "min_lift_m": 0.15, "max_slip_m": 0.001}
     assert summary["worst_class_rate"] == 0.5 and not summary["meets_targets"]

@@ -1,0 +1,324 @@
+"""`homer grasp-suite --relocations`: the relocation suite, every (object, from, to) move of a dataset's days.
+
+The triples are the person's moves in the training days of a dataset made by `homer generate` (each day file
+stores them and its `DayKey`). Each triple is tried once, from the apartment's state at its first occurrence:
+the day is lived again exactly (`Generator.replay`, in a world that also holds the robot at its parking pose)
+up to the last snapshot before the move at which the object rests on its source and is not in the person's
+hand. From there only the robot acts, with its real skills: it opens what closes over the source and the
+destination, picks the object, carries it, places it, and closes what it opened.
+
+Success: the scene-graph observer puts the object ON or INSIDE the destination, it stands as it should (an
+object that is not cloth or a ball stands up, `Arm.fallen_over`), and no other object (but what rides on the
+moved one) moved more than `planners.suites.collateral.MAX_DISPLACEMENT`. A triple the robot cannot be asked is
+excluded with its reason: a source or destination outside the apartment (the robot stays in), an object the
+robot cannot grasp (`ungraspable_reason`). Each failure gets a cause (the first word of its reason: the skill
+that failed and what its reason says went wrong (`KINDS`), `wrong place`, `fell over`, `collateral`, `state`)
+for the cause table.
+
+mujoco and the planners that need it are imported inside the functions that run trials.
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+import time
+from collections import Counter
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from homer_sim.clock import GRID_MIN
+from homer_sim.data.dataset import Dataset, Day
+from homer_sim.execution import IN_PROCESS, Backend
+from homer_sim.home.catalog import CATALOG
+from planners.suites.collateral import collateral_reason, displaced
+from planners.suites.grasp_suite import stable_hash
+
+log = logging.getLogger(__name__)
+
+OUTSIDE = "outside"  # the room beyond the front door
+NO_FALL_FAMILIES = ("cloth", "sphere")  # shapes with no up to keep
+REPLAYS = 4  # snapshots (latest first) at which the day is lived again to find the object on its source
+TARGET_OVERALL = 0.97
+TARGET_CLASS = 0.9
+QUICK_SIZE = 6
+KINDS = ("fell out of the hand", "slipped", "no free base pose", "no path", "fell over", "has fallen over",
+         "closed on nothing", "rose only", "unreachable", "no free spot", "nothing rests on", "leaves the arm's reach",
+         "ended")  # what a skill's failure reason says went wrong, for the cause table
+
+
+@dataclass(frozen=True)
+class Occurrence:
+    """Triple (obj, source, destination) first moved by the person at routine `minute` of day `index` of
+    `household`'s training days."""
+
+    obj: str
+    source: str
+    destination: str
+    household: str
+    index: int
+    minute: float
+
+    @property
+    def triple(self) -> str:
+        return f"{self.obj}: {self.source} -> {self.destination}"
+
+
+@dataclass(frozen=True)
+class TripleResult:
+    """One relocation: success, its failure cause and reason, where the object ended, wall time (s)."""
+
+    occurrence: Occurrence
+    cls: str
+    success: bool
+    cause: str
+    reason: str
+    ended_on: str
+    wall_s: float
+
+
+def occurrences(data: Path, households: list[str] | None = None) -> list[Occurrence]:
+    """The first occurrence of every (object, source, destination) move in the training days of the dataset
+    at `data`, in household, day and minute order."""
+    dataset = Dataset(data)
+    first: dict[tuple[str, str, str], Occurrence] = {}
+    for household in households or list(dataset.meta.households):
+        for day in dataset.days(household, "train"):
+            for minute, obj, source, destination, _ in day.moves:
+                first.setdefault((obj, source, destination),
+                                 Occurrence(obj, source, destination, household, day.index, float(minute)))
+    return list(first.values())
+
+
+def exclusion_reason(occurrence: Occurrence, cls: str) -> str | None:
+    """Why the robot cannot be asked to make this move, or None when it can."""
+    from planners.grasps.candidate import ungraspable_reason
+
+    if OUTSIDE in (occurrence.source, occurrence.destination):
+        return "outside the apartment (the robot stays in)"
+    reason = ungraspable_reason(CATALOG[cls])
+    return f"not graspable: {reason}" if reason else None
+
+
+def quick_subset(tried: list[Occurrence], classes: dict[str, str]) -> list[Occurrence]:
+    """The fast representative subset: the first triple of each destination kind (furniture with doors,
+    drawers, open surfaces, appliances...) by destination, at most QUICK_SIZE, one per object family."""
+    chosen: list[Occurrence] = []
+    families: set[str] = set()
+    destinations: set[str] = set()
+    for occurrence in tried:
+        family = CATALOG[classes[occurrence.obj]].family
+        if family in families or occurrence.destination in destinations:
+            continue
+        chosen.append(occurrence)
+        families.add(family)
+        destinations.add(occurrence.destination)
+        if len(chosen) == QUICK_SIZE:
+            break
+    return chosen
+
+
+# --- one trial ------------------------------------------------------------------------------------------
+class Bench:
+    """The suite's worlds: a generator for the person's days and the robot's world they are lived again in."""
+
+    def __init__(self, data: Path) -> None:
+        from homer_sim.data.generate import Generator, Sources
+        from homer_sim.person.avatar import add_avatar
+        from homer_sim.person.executor import Executor
+        from homer_sim.world import World
+        from planners.robot import add_robot
+
+        self.dataset = Dataset(data)
+        self.generator = Generator(Sources())
+        self.world = World(extras=[add_avatar, add_robot])
+        self.executor = Executor(self.world)
+        self.containers: dict[str, list[str]] = {}
+        for art in self.world.articulations.values():
+            self.containers.setdefault(art.furniture, []).append(art.name)
+
+    def day(self, occurrence: Occurrence) -> Day:
+        from homer_sim.data.dataset import day_path, read_day
+
+        return read_day(day_path(self.dataset.root, occurrence.household, "train", occurrence.index))
+
+    def live_until(self, occurrence: Occurrence) -> str | None:
+        """Live the occurrence's day up to the last snapshot before the move at which the object rests on its
+        source outside the person's hand (the latest REPLAYS snapshots the recorded day has it there are tried);
+        None when found, else why not."""
+        day = self.day(occurrence)
+        last = int(occurrence.minute // GRID_MIN) * GRID_MIN
+        nodes = self.dataset.meta.nodes
+        obj, source = nodes.index(occurrence.obj), nodes.index(occurrence.source)
+        found = f"{occurrence.obj} rested on {occurrence.source} at no snapshot of the day before the move"
+        recorded = [int(m) for m, parent in zip(day.minutes, day.parent[:, obj], strict=True)
+                    if m <= last and parent == source]  # where the recorded day has it on its source
+        for minute in recorded[::-1][:REPLAYS]:
+            self.generator.replay(occurrence.household, day.replay_key(), day.schedule, executor=self.executor,
+                                  end_min=minute)
+            graph = self.executor.observer.update()
+            if graph.parent_of(occurrence.obj) == occurrence.source and occurrence.obj not in set(
+                    self.executor.avatar.carried()):
+                return None
+            found = f"at {minute} min {occurrence.obj} was on {graph.parent_of(occurrence.obj)} or in the hand"
+        return found
+
+
+def _anchor(graph, world, node: str) -> str:
+    """The first node at or above `node` that is not a movable object (where the robot stands to reach it)."""
+    movable = set(world.object_names)
+    while node in movable and graph.parent_of(node):
+        node = graph.parent_of(node)
+    return node
+
+
+def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, destination: str) -> str | None:
+    """Open what closes over `source` and `destination`, pick `obj`, place it, close what was opened; None when
+    every skill succeeded, else the first failure's reason prefixed with its skill."""
+    graph = robot.observer.update()
+    anchor = _anchor(graph, robot.world, source)
+    parts = [p for node in dict.fromkeys((anchor, destination)) for p in containers.get(node, [])]
+    for part in parts:
+        result = robot.open_articulation(part)
+        if not result.success:
+            return f"open {part}: {result.reason}"
+    result = robot.pick(obj, anchor if anchor in robot.navigator.furniture else None, into=destination)
+    if not result.success:
+        return f"pick: {result.reason}"
+    result = robot.place(destination)
+    if not result.success:
+        return f"place: {result.reason.removeprefix('place: ')}"
+    for part in parts[::-1]:
+        result = robot.close_articulation(part)
+        if not result.success:
+            return f"close {part}: {result.reason}"
+    return None
+
+
+def run_triple(bench: Bench, occurrence: Occurrence, cls: str, rng: np.random.Generator) -> TripleResult:
+    """Live the day up to the move (see `Bench.live_until`), relocate the object, judge the outcome."""
+    from homer_sim.errors import HomerError
+    from planners.skills import Robot
+
+    started = time.perf_counter()
+
+    def result(cause: str, reason: str = "", ended: str = "") -> TripleResult:
+        return TripleResult(occurrence, cls, not cause, cause, reason, ended, time.perf_counter() - started)
+
+    try:
+        problem = bench.live_until(occurrence)
+    except HomerError as error:
+        problem = f"the day could not be lived again: {error}"
+    if problem is not None:
+        return result("state", problem)
+    robot = Robot(bench.world, rng)
+    before = bench.world.object_positions()
+    try:
+        failure = relocate(robot, bench.containers, occurrence.obj, occurrence.source, occurrence.destination)
+    except Exception as error:  # a bug in a skill is this triple's failure, not the suite's end
+        log.exception("%s", occurrence.triple)
+        failure = f"error: {type(error).__name__} {error}"
+    bench.world.settle(max_seconds=2.0)
+    graph = robot.observer.update()
+    ended = graph.parent_of(occurrence.obj) or ""
+    if failure is not None:
+        return result(cause_of(failure), failure, ended)
+    if ended != occurrence.destination:
+        return result("wrong place", f"{occurrence.obj} ended on {ended}", ended)
+    if CATALOG[cls].family not in NO_FALL_FAMILIES and robot.arm.fallen_over(occurrence.obj):
+        return result("fell over", f"{occurrence.obj} lies on its side on {ended}", ended)
+    riders = {occurrence.obj} | {n for n in bench.world.object_names if _rides_on(graph, n, occurrence.obj)}
+    found = displaced(bench.world, before, skip=riders)
+    return result("collateral", collateral_reason(found), ended) if found else result("", "", ended)
+
+
+def cause_of(failure: str) -> str:
+    """The cause-table entry of a skill failure `failure` ("<skill>: <reason>"): the skill and the first of
+    KINDS its reason names (the last one it names, where it lists several grasps' failures)."""
+    skill = failure.split(":")[0].split(" ")[0]
+    named = [(failure.rfind(kind), kind) for kind in KINDS if kind in failure]
+    return f"{skill}: {max(named)[1]}" if named else skill
+
+
+def _rides_on(graph, node: str, carrier: str) -> bool:
+    """Whether `node` rests (through other objects) on `carrier`."""
+    parent = graph.parent_of(node)
+    while parent:
+        if parent == carrier:
+            return True
+        parent = graph.parent_of(parent)
+    return False
+
+
+# --- the suite ------------------------------------------------------------------------------------------
+def relocation_trial(bench: Bench, trial: tuple[Occurrence, str, int]) -> TripleResult:
+    """Trial = (occurrence, its object's class, seed) on a worker's Bench: the task function of the execution
+    backend; the random stream comes from (seed, triple) alone."""
+    occurrence, cls, seed = trial
+    return run_triple(bench, occurrence, cls, np.random.default_rng([seed, stable_hash(occurrence.triple)]))
+
+
+def run_relocations(data: Path, quick: bool = False, seed: int = 0, progress: bool = True,
+                    households: list[str] | None = None, backend: Backend = IN_PROCESS) -> dict:
+    """Try every triple of the dataset at `data` (or the quick subset) on `backend` (this process, local
+    processes or Ray: on a cluster every node must see the dataset at `data`) and summarise as one JSON object.
+    Each triple's random stream is seeded from (seed, triple), so a triple does not depend on which others run."""
+    from tqdm import tqdm
+
+    bench = Bench(data)
+    classes = {o.name: o.cls for o in bench.world.layout.objects}
+    found = occurrences(data, households)
+    excluded = {o.triple: why for o in found if (why := exclusion_reason(o, classes[o.obj])) is not None}
+    tried = [o for o in found if o.triple not in excluded]
+    if quick:
+        tried = quick_subset(tried, classes)
+    started = time.perf_counter()
+    trials = [(occurrence, classes[occurrence.obj], seed) for occurrence in tried]
+    done: dict[str, TripleResult] = {}
+    with backend.run(relocation_trial, trials, Bench, (Path(data).resolve(),), bench) as run:
+        for outcome in tqdm(run, total=len(trials), desc="relocation suite", unit="triple", disable=not progress,
+                            file=sys.stderr):
+            log.info("%s: %s (%.1f s)", outcome.occurrence.triple, "ok" if outcome.success else outcome.reason,
+                     outcome.wall_s)
+            done[outcome.occurrence.triple] = outcome
+    return summarise([done[o.triple] for o in tried], excluded, time.perf_counter() - started,
+                     {"quick": quick, "seed": seed, "data": str(data), "triples": len(found),
+                      "execution": run.usage()})
+
+
+def summarise(results: list[TripleResult], excluded: dict[str, str], wall_s: float, extra: dict) -> dict:
+    """The relocation suite's JSON object: counts, per-class rates, the cause table and every triple."""
+    per_class: dict[str, dict] = {}
+    for r in results:
+        entry = per_class.setdefault(r.cls, {"tried": 0, "successes": 0})
+        entry["tried"] += 1
+        entry["successes"] += int(r.success)
+    for entry in per_class.values():
+        entry["rate"] = entry["successes"] / entry["tried"]
+    successes = sum(r.success for r in results)
+    overall = successes / len(results) if results else 0.0
+    worst = min((e["rate"] for e in per_class.values()), default=0.0)
+    return {
+        "tried": len(results), "successes": successes, "overall": overall,
+        "excluded": dict(excluded), "n_excluded": len(excluded),
+        "causes": dict(Counter(r.cause for r in results if not r.success).most_common()),
+        "per_class": per_class, "worst_class_rate": worst,
+        "meets_targets": bool(results) and overall >= TARGET_OVERALL and worst >= TARGET_CLASS,
+        "results": [{**asdict(r.occurrence), "class": r.cls, "success": r.success, "cause": r.cause,
+                     "reason": r.reason, "ended_on": r.ended_on, "wall_s": round(r.wall_s, 2)} for r in results],
+        "wall_s": wall_s, **extra,
+    }
+
+
+def format_relocations(result: dict) -> str:
+    """The relocation suite result as plain text: failures, excluded triples, causes, per class, overall."""
+    lines = [f"FAILED {r['obj']}: {r['source']} -> {r['destination']}: {r['reason']}"
+             for r in result["results"] if not r["success"]]
+    lines += [f"excluded {triple}: {why}" for triple, why in result["excluded"].items()]
+    lines += [f"cause {cause:<14} {count}" for cause, count in result["causes"].items()]
+    lines += [f"{cls:<20} {e['successes']:>3}/{e['tried']:<3}" for cls, e in result["per_class"].items()]
+    lines.append(f"overall {result['overall']:.1%} of {result['tried']} triples tried; {result['n_excluded']} "
+                 f"of {result['triples']} excluded")
+    return "\n".join(lines)

@@ -1,0 +1,92 @@
+"""The relocation suite: triples read from a generated dataset, the quick subset in physics in the default pass,
+the whole suite on the 5-household dataset behind the `slow` marker."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from homer_sim.data.generate import generate
+from homer_sim.world import World
+from planners.suites.collateral import MAX_DISPLACEMENT, collateral_reason, displaced
+from planners.suites.relocation_suite import (
+    TARGET_CLASS,
+    TARGET_OVERALL,
+    Occurrence,
+    exclusion_reason,
+    occurrences,
+    run_relocations,
+)
+
+FULL_DATA = Path(os.environ.get("HOMER_SIM_RELOCATION_DATA", Path.home() / ".cache/homer-sim/data_5x50_v2"))
+
+
+@pytest.fixture(scope="module")
+def one_day(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """One household's one training day (household_a, seed 0)."""
+    out = tmp_path_factory.mktemp("relocation_data")
+    generate(out, n_households=1, train_days=1, test_days=0, seed=0, progress=False)
+    return out
+
+
+def test_occurrences_are_the_days_moves_each_triple_once(one_day: Path) -> None:
+    found = occurrences(one_day)
+    triples = [(o.obj, o.source, o.destination) for o in found]
+    assert len(triples) == len(set(triples)) > 5
+    assert all(o.household == "household_a" and o.index == 0 for o in found)
+    assert [o.minute for o in found] == sorted(o.minute for o in found)
+
+
+def test_exclusions_name_outside_and_ungraspable_objects() -> None:
+    out = Occurrence("keys", "bench", "outside", "household_a", 0, 400.0)
+    assert exclusion_reason(out, "keys") == "outside the apartment (the robot stays in)"
+    assert exclusion_reason(Occurrence("plate", "cupboard", "sink_dining_room", "h", 0, 1.0), "plate").startswith(
+        "not graspable: 26 cm across")
+    assert exclusion_reason(Occurrence("bowl", "cupboard", "sink_dining_room", "h", 0, 1.0), "bowl") is None
+
+
+def test_displaced_lists_what_moved_beyond_the_limit(world: World) -> None:
+    before = world.object_positions()
+    name, other = world.object_names[:2]
+    pos, quat = world.object_pose(name)
+    world.set_object_pose(name, pos + np.array([MAX_DISPLACEMENT * 2, 0.0, 0.0]), quat)
+    pos, quat = world.object_pose(other)
+    world.set_object_pose(other, pos + np.array([0.0, MAX_DISPLACEMENT / 2, 0.0]), quat)
+    found = displaced(world, before)
+    assert [n for n, _ in found] == [name] and found[0][1] == pytest.approx(MAX_DISPLACEMENT * 2)
+    assert displaced(world, before, skip={name}) == []
+    assert collateral_reason(found) == f"collateral: moved {name} 4.0 cm"
+
+
+QUICK_OUTCOMES = {  # measured; the two failures are open work of issue 19 (a roll in a cabinet, a glass in a
+    # cupboard whose open doors, with the dishwasher's, leave no base pose that reaches it)
+    "bowl: cupboard -> table_dining_room": "",
+    "milk: table_dining_room -> fridge": "",
+    "spoon: table_dining_room -> cupboard": "",
+    "toilet_paper: bathroom_cabinet -> bathroom_counter": "pick: no free base pose",
+    "drinking_glass: cupboard -> dishwasher": "pick: no free base pose",
+    "towel: bathroom_counter -> shower": "",
+}
+
+
+@pytest.mark.physics
+def test_quick_relocations_add_up_and_keep_their_outcomes(one_day: Path) -> None:
+    result = run_relocations(one_day, quick=True, progress=False)
+    assert result["tried"] == len(result["results"]) == len(QUICK_OUTCOMES)
+    assert result["successes"] + sum(result["causes"].values()) == result["tried"]
+    assert sum(e["tried"] for e in result["per_class"].values()) == result["tried"]
+    outcomes = {f"{r['obj']}: {r['source']} -> {r['destination']}": r["cause"] for r in result["results"]}
+    assert outcomes == QUICK_OUTCOMES, [r["reason"] for r in result["results"] if not r["success"]]
+
+
+@pytest.mark.slow
+def test_full_relocation_suite_meets_its_targets() -> None:
+    if not (FULL_DATA / "meta.json").is_file():
+        pytest.skip(f"no 5-household dataset at {FULL_DATA} (set HOMER_SIM_RELOCATION_DATA)")
+    result = run_relocations(FULL_DATA, progress=False)
+    assert result["triples"] == result["tried"] + result["n_excluded"]
+    assert result["overall"] >= TARGET_OVERALL, result["causes"]
+    assert result["worst_class_rate"] >= TARGET_CLASS, result["per_class"]
