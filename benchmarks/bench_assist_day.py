@@ -39,7 +39,7 @@ def main() -> None:
     cpu = pin_to_one_core()
     spec = EvalSpec(str(args.data), args.method, checkpoints=str(args.checkpoints) if args.checkpoints else None)
     with tempfile.TemporaryDirectory() as out:
-        result = assist_eval(spec, days=args.days, workers=1, out=Path(out), progress=False)
+        result = assist_eval(spec, days=args.days, out=Path(out), progress=False)
         walls = [json.loads(path.read_text())["wall_s"] for path in sorted((Path(out) / "days").glob("*.json"))]
     emit({"benchmark": "assist_day", "machine": machine_info(cpu), "method": args.method, "days": len(walls),
           "wall_s_per_day": summary(walls, 1), "target_s_per_day": TARGET_S_PER_DAY,

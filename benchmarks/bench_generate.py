@@ -21,6 +21,7 @@ sys.path.insert(0, str(REPO_ROOT))
 from benchmarks._common import emit, machine_info, pin_to_one_core, positive_int, setup_logging, summary
 from homer_sim.data.generate import Generator, Sources, generate
 from homer_sim.days import DayKey  # noqa: E402
+from homer_sim.execution import Backend
 
 log = logging.getLogger("benchmarks.generate")
 
@@ -60,7 +61,7 @@ def main() -> None:
         import os
 
         os.sched_setaffinity(0, range(os.cpu_count() or 1))  # the dataset run uses all its workers
-        summary_ = generate(args.dataset, 5, 50, 10, seed=0, workers=args.workers, progress=False)
+        summary_ = generate(args.dataset, 5, 50, 10, seed=0, backend=Backend(args.workers), progress=False)
         result["dataset"] = {**summary_, "workers": args.workers, "target_s": TARGET_DATASET_S,
                              "meets_target": summary_["wall_s"] <= TARGET_DATASET_S}
     emit(result)

@@ -18,29 +18,39 @@ import argparse
 import json
 import logging
 import sys
-import time
+from functools import partial
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks.paper_results import Runs, dataset_fingerprint  # noqa: E402
 from homer_sim.data.dataset import Dataset  # noqa: E402
-from model.evaluate import HEADLINE_WINDOW_MIN, FitSpec, household_scores, household_split, summarise  # noqa: E402
+from model.evaluate import (  # noqa: E402
+    HEADLINE_WINDOW_MIN,
+    FitSpec,
+    FitTask,
+    fit_task,
+    household_split,
+    run_fit,
+    score_household,
+    summarise,
+)
 from model.names import DEFAULT_METHODS  # noqa: E402
 from model.report import format_f1_table, format_table  # noqa: E402
+from model.train import TORCH_THREADS  # noqa: E402
+from scenarios.cli.common import add_backend_arguments, backend_from_args  # noqa: E402
 
 log = logging.getLogger("homer_plus_results")
 PUBLISHED_F1 = {"gnn (STOT, published)": 0.43, "SLaTe-PRO (published)": 0.57}
 
 
-def run_one(dataset: Dataset, house: str, method: str, folder: Path) -> dict:
-    """Fit (or load) one method on one household; its F1 and paper-table scores on the test days."""
-    started = time.perf_counter()
+def run_task(dataset: Dataset, house: str, method: str, folder: Path) -> FitTask:
+    """One method on one household, fitted (or loaded) and tuned for F1, then for the paper's table, and scored on
+    the test days."""
     fit, val, test, pool = household_split(dataset, house, None)
     spec = FitSpec(method, tuple(fit), tuple(val))
-    scores = household_scores(spec, dataset.meta, (test, pool), HEADLINE_WINDOW_MIN, spec.path(folder, house),
-                              ("f1", "paper"))
-    return {**scores, "wall_s": round(time.perf_counter() - started, 1)}
+    return fit_task(f"{house}/{method}", spec, dataset.meta, HEADLINE_WINDOW_MIN, spec.path(folder, house),
+                    ("f1", "paper"), partial(score_household, (test, pool), HEADLINE_WINDOW_MIN))
 
 
 def collect(records: dict) -> dict:
@@ -108,18 +118,21 @@ def main() -> None:
     parser.add_argument("--households", default=None, help="comma-separated subset (default all)")
     parser.add_argument("--methods", default=",".join(DEFAULT_METHODS), help="comma-separated methods")
     parser.add_argument("--report", action="store_true", help="only write the files from the runs so far")
+    add_backend_arguments(parser, "runs (one per household and method)")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(asctime)s %(name)s: %(message)s")
     dataset = Dataset(args.data)
     households = args.households.split(",") if args.households else list(dataset.meta.households)
     args.out.mkdir(parents=True, exist_ok=True)
     runs = Runs(args.out / "runs.json", dataset_fingerprint(dataset))
-    for house in households if not args.report else ():
-        for method in args.methods.split(","):
-            if not runs.done(f"{house}/{method}"):
-                log.info("running %s on %s", method, house)
-                runs.add(f"{house}/{method}", run_one(dataset, house, method, args.checkpoints or
-                                                      args.out / "checkpoints"))
+    todo = [(house, method) for house in households if not args.report for method in args.methods.split(",")
+            if not runs.done(f"{house}/{method}")]
+    tasks = (run_task(dataset, house, method, args.checkpoints or args.out / "checkpoints") for house, method in todo)
+    with backend_from_args(args).run(run_fit, tasks, type(None), cpus_per_task=TORCH_THREADS) as run:
+        for result in run:  # checkpoints and runs.json are written here, as each run finishes
+            log.info("ran %s (%d s)", result.key, round(result.wall_s))
+            result.save()
+            runs.add(result.key, {**result.scores, "wall_s": round(result.wall_s, 1)})
     json.dump(write_outputs(runs.records, args.out), sys.stdout, indent=1)
     sys.stdout.write("\n")
 

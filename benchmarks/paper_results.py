@@ -13,6 +13,7 @@ days.png, pretrain.png, ablation.md. One JSON object (the main table at 30 min a
 
     .venv/bin/python benchmarks/paper_results.py --data DIR --out DIR [--experiments main,ablation]
     .venv/bin/python benchmarks/paper_results.py --data DIR --out DIR --report   # files from the runs so far
+    .venv/bin/python benchmarks/paper_results.py --data DIR --out DIR --ray auto   # runs as tasks on a cluster
 """
 
 from __future__ import annotations
@@ -23,8 +24,8 @@ import json
 import logging
 import os
 import sys
-import time
 from dataclasses import asdict
+from functools import partial
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
@@ -32,22 +33,29 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import numpy as np  # noqa: E402
 
 from homer_sim.data.dataset import Dataset, Day  # noqa: E402
+from homer_sim.execution import IN_PROCESS, Backend  # noqa: E402
 from model.evaluate import (  # noqa: E402
     CURVE_WINDOWS_MIN,
     HEADLINE_WINDOW_MIN,
+    FitResult,
     FitSpec,
+    FitTask,
     days_fingerprint,
-    fit_tuned,
+    fit_task,
     household_result,
     household_split,
+    run_fit,
     score_windows,
     split_days,
     summarise,
 )
-from model.metrics import Counts, day_queries  # noqa: E402
+from model.metrics import Counts, Queries, day_queries  # noqa: E402
 from model.names import DEFAULT_METHODS  # noqa: E402
 from model.plots import days_curve, window_bars  # noqa: E402
+from model.predictor import Predictor  # noqa: E402
 from model.report import format_table  # noqa: E402
+from model.train import TORCH_THREADS  # noqa: E402
+from scenarios.cli.common import add_backend_arguments, backend_from_args  # noqa: E402
 
 log = logging.getLogger("paper_results")
 EXPERIMENTS = ("main", "ablation", "days", "pretrain")
@@ -94,22 +102,32 @@ def dataset_fingerprint(dataset: Dataset) -> str:
                              for day in dataset.load(house, split)])
 
 
-def run_one(dataset: Dataset, house: str, method: str, days: int | None, folder: Path,
-            init: Path | None = None) -> dict:
-    """Fit (or load), tune at 30 min, and count outcomes on the test days for every curve window."""
-    started = time.perf_counter()
+def run_task(dataset: Dataset, key: str, house: str, method: str, days: int | None, folder: Path,
+             init: Path | None = None) -> FitTask:
+    """The fit (or the checkpoint), tuning at 30 min and outcome counts on the test days for every curve window."""
     fit, val, test, pool = household_split(dataset, house, days)
     spec = FitSpec(method, tuple(fit), tuple(val), init=init)
-    predictor, info = fit_tuned(spec, dataset.meta, HEADLINE_WINDOW_MIN, spec.path(folder, house))
     queries = day_queries(test, max(CURVE_WINDOWS_MIN) // dataset.meta.grid_min)
-    scored = score_windows(predictor, queries, CURVE_WINDOWS_MIN, dataset.meta.grid_min, pool)
+    return fit_task(key, spec, dataset.meta, HEADLINE_WINDOW_MIN, spec.path(folder, house),
+                    scorer=partial(curve_scores, queries, pool))
+
+
+def curve_scores(queries: Queries, pool: np.ndarray, predictor: Predictor, target: str) -> dict:
+    """Outcome counts of a tuned predictor on the test queries for every curve window (all movable nodes as the
+    unused pool, and the household's used objects)."""
+    scored = score_windows(predictor, queries, CURVE_WINDOWS_MIN, predictor.meta.grid_min, pool)
     return {"windows": {str(w): {"all": asdict(c), "used_pool": asdict(p)} for w, (c, p) in scored.items()},
-            "queries": len(queries), "params": predictor.params, "info": info,
-            "wall_s": round(time.perf_counter() - started, 1)}
+            "queries": len(queries)}
 
 
-def pretrained(dataset: Dataset, house: str, folder: Path) -> Path:
-    """Checkpoint of the graph network trained on every other household's training days (fit and validation)."""
+def record(result: FitResult) -> dict:
+    """The runs.json record of a finished run."""
+    return {**result.scores, "params": result.predictor.params, "info": result.info,
+            "wall_s": round(result.wall_s, 1)}
+
+
+def pretrain_task(dataset: Dataset, house: str, folder: Path) -> FitTask:
+    """The graph network trained on every other household's training days (fit and validation)."""
     fit: list[Day] = []
     val: list[Day] = []
     for other in dataset.meta.households:
@@ -117,9 +135,7 @@ def pretrained(dataset: Dataset, house: str, folder: Path) -> Path:
             f, v = split_days(dataset.load(other, "train"))
             fit, val = fit + f, val + v
     spec = FitSpec("gnn", tuple(fit), tuple(val))
-    path = spec.path(folder / "pretrain", f"without_{house}")
-    fit_tuned(spec, dataset.meta, HEADLINE_WINDOW_MIN, path)
-    return path
+    return fit_task(house, spec, dataset.meta, HEADLINE_WINDOW_MIN, spec.path(folder / "pretrain", f"without_{house}"))
 
 
 def plan(dataset: Dataset, experiments: list[str], households: list[str], methods: list[str]) -> list[tuple]:
@@ -142,13 +158,24 @@ def plan(dataset: Dataset, experiments: list[str], households: list[str], method
     return list(dict.fromkeys(runs))
 
 
-def execute(dataset: Dataset, runs: Runs, todo: list[tuple], folder: Path) -> None:
-    for k, (key, house, method, days, pretrain) in enumerate(todo):
-        if runs.done(key):
-            continue
-        log.info("run %d/%d: %s", k + 1, len(todo), key)
-        init = pretrained(dataset, house, folder) if pretrain else None
-        runs.add(key, run_one(dataset, house, method, days, folder, init))
+def execute(dataset: Dataset, runs: Runs, todo: list[tuple], folder: Path, backend: Backend = IN_PROCESS) -> None:
+    """Every run of `todo` not yet in `runs`, as tasks on `backend`: first the pre-training each household's
+    fine-tuning runs start from, then the runs; checkpoints and runs.json are written here as tasks finish."""
+    todo = [run for run in todo if not runs.done(run[0])]
+    pretraining = [pretrain_task(dataset, house, folder)
+                   for house in dict.fromkeys(house for _, house, _, _, pretrain in todo if pretrain)]
+    inits = {task.key: task.checkpoint for task in pretraining}
+    with backend.run(run_fit, pretraining, type(None), cpus_per_task=TORCH_THREADS) as run:
+        for result in run:
+            log.info("pre-trained without %s (%d s)", result.key, round(result.wall_s))
+            result.save()
+    tasks = (run_task(dataset, key, house, method, days, folder, inits[house] if pretrain else None)
+             for key, house, method, days, pretrain in todo)
+    with backend.run(run_fit, tasks, type(None), cpus_per_task=TORCH_THREADS) as run:
+        for k, result in enumerate(run):
+            log.info("run %d/%d: %s (%d s)", k + 1, len(todo), result.key, round(result.wall_s))
+            result.save()
+            runs.add(result.key, record(result))
 
 
 def _counts(record: dict, window: int, pool: str = "all") -> Counts:
@@ -252,6 +279,7 @@ def main() -> None:
                         help=f"from {', '.join(EXPERIMENTS)}, run in the order given")
     parser.add_argument("--households", default=None, help="comma-separated subset (default all)")
     parser.add_argument("--methods", default=",".join(DEFAULT_METHODS), help="methods of the main experiment")
+    add_backend_arguments(parser, "training runs")
     parser.add_argument("--report", action="store_true",
                         help="only write the files from the runs already in OUT/runs.json (another process may still "
                              "be adding runs)")
@@ -267,7 +295,7 @@ def main() -> None:
     runs = Runs(args.out / "runs.json", dataset_fingerprint(dataset))
     if not args.report:
         execute(dataset, runs, plan(dataset, experiments, households, args.methods.split(",")),
-                args.out / "checkpoints")
+                args.out / "checkpoints", backend_from_args(args))
     json.dump(write_outputs(runs.records, args.out), sys.stdout, indent=1)
     sys.stdout.write("\n")
 

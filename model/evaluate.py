@@ -15,8 +15,10 @@ import hashlib
 import itertools
 import json
 import logging
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, fields
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -24,9 +26,11 @@ from tqdm import tqdm
 
 from homer_sim.clock import DEFAULT_WINDOW_MIN
 from homer_sim.data.dataset import Dataset, DatasetMeta, Day
+from homer_sim.execution import IN_PROCESS, Backend
 from model.methods import check_method, load_predictor, make_predictor, save_predictor
 from model.metrics import F1_STEPS, Counts, Queries, day_queries, gate, relocation_counts, score, window_steps
 from model.predictor import ModelError, Predictor, Rollout
+from model.train import TORCH_THREADS
 
 log = logging.getLogger(__name__)
 VAL_FRACTION = 0.1
@@ -125,28 +129,29 @@ def tuning_key(target: str, window_min: int) -> str:
     return "f1" if target == "f1" else f"{target}@{window_min}"
 
 
-def fit_tuned(spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | None = None,
-              progress: bool = True, target: str = "paper") -> tuple[Predictor, dict]:
-    """Load the cached predictor at `path` or fit one; tune it for `target` unless the cache already was.
+def fit_and_tune(spec: FitSpec, meta: DatasetMeta, window_min: int, target: str = "paper",
+                 cached: tuple[Predictor, dict] | None = None, init_state: dict[str, np.ndarray] | None = None,
+                 progress: bool = True) -> tuple[Predictor, dict, bool]:
+    """Fit `spec` (or take the `cached` predictor and its info) and tune it for `target` unless it already was;
+    reads and writes no file. init_state: pre-trained weights to start from. Returns the predictor, its
+    provenance (days, training report, tunings and their validation scores) and whether it is new or newly tuned.
 
     target "paper" and "assist" tune at `window_min`, "f1" for SLaTe-PRO's F1 over 10 .. 60 minutes (window_min
     unused).
-    Every tuning of one fit is kept in the checkpoint's info["tunings"]. Returns the predictor and its
-    provenance (days, training report, tunings and their validation scores).
     """
     key = tuning_key(target, window_min)
     steps = F1_STEPS if target == "f1" else window_steps(window_min, meta.grid_min)
     tunings: dict = {}
-    if path is not None and path.is_file():
-        predictor, info = load_predictor(path, meta, progress=progress)
+    if cached is not None:
+        predictor, info = cached
         tunings = info.get("tunings", {}) if info.get("tuning_version") == TUNING_VERSION else {}
         if key in tunings:
             predictor.set_params(**tunings[key]["params"])
-            return predictor, info
+            return predictor, info, False
     else:
         predictor = make_predictor(spec.method, meta, progress=progress, **dict(spec.config))
-        if spec.init is not None:
-            predictor.load_state(load_predictor(spec.init, meta, progress=progress)[0].state())
+        if init_state is not None:
+            predictor.load_state(init_state)
         predictor.fit(spec.fit_days, spec.val_days)
         info = {"fit_days": len(spec.fit_days), "val_days": len(spec.val_days), "init": str(spec.init or "")}
         report = getattr(predictor, "report", None)
@@ -155,10 +160,79 @@ def fit_tuned(spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | No
     params, val_score = tune(predictor, day_queries(spec.val_days, steps), steps, target)
     log.info("%s tuned for %s: %s (validation score %.4f)", spec.method, key, params, val_score)
     tunings = {**tunings, key: {"params": params, "val_score": round(val_score, 4)}}
-    info = {**info, "tuning_version": TUNING_VERSION, "tunings": tunings}
-    if path is not None:
-        save_predictor(path, predictor, info)
-    return predictor, info
+    return predictor, {**info, "tuning_version": TUNING_VERSION, "tunings": tunings}, True
+
+
+def fit_tuned(spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | None = None,
+              progress: bool = True, target: str = "paper") -> tuple[Predictor, dict]:
+    """Load the cached predictor at `path` or fit one; tune it for `target` unless the cache already was (see
+    `fit_and_tune`), and write the checkpoint when it changed. Every tuning of one fit is kept in the
+    checkpoint's info["tunings"]."""
+    result = run_fit(None, fit_task(spec.method, spec, meta, window_min, path, (target,), progress=progress))
+    result.save()
+    return result.predictor, result.info
+
+
+@dataclass(frozen=True)
+class FitTask:
+    """A fit (unless cached) tuned for each of `targets` in turn, `scorer(predictor, target)` called after each:
+    everything a worker needs, read from disk by the driver (`fit_task`); `run_fit` runs it. `key` names it and
+    `checkpoint` is where the driver keeps the predictor."""
+
+    key: str
+    spec: FitSpec
+    meta: DatasetMeta
+    window_min: int
+    targets: tuple[str, ...] = ("paper",)
+    scorer: Callable[[Predictor, str], dict] | None = None
+    checkpoint: Path | None = None
+    cached: tuple[Predictor, dict] | None = None
+    init_state: dict[str, np.ndarray] | None = None
+    progress: bool = False
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """A FitTask done: the tuned predictor and its provenance, whether it differs from the checkpoint (then the
+    driver writes it there), what the scorer returned (merged over targets) and the wall seconds."""
+
+    key: str
+    checkpoint: Path | None
+    predictor: Predictor
+    info: dict
+    changed: bool
+    scores: dict
+    wall_s: float
+
+    def save(self) -> None:
+        """Write the checkpoint if the predictor is new or newly tuned (on the driver)."""
+        if self.changed and self.checkpoint is not None:
+            save_predictor(self.checkpoint, self.predictor, self.info)
+
+
+def fit_task(key: str, spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | None = None,
+             targets: tuple[str, ...] = ("paper",), scorer: Callable[[Predictor, str], dict] | None = None,
+             progress: bool = False) -> FitTask:
+    """The FitTask of `spec`, with the checkpoint at `path` and the pre-trained weights of spec.init read here,
+    on the driver."""
+    cached = load_predictor(path, meta, progress=progress) if path is not None and path.is_file() else None
+    init_state = None
+    if spec.init is not None and cached is None:
+        init_state = load_predictor(spec.init, meta, progress=progress)[0].state()
+    return FitTask(key, spec, meta, window_min, targets, scorer, path, cached, init_state, progress)
+
+
+def run_fit(_: None, task: FitTask) -> FitResult:
+    """Fit, tune and score a FitTask; writes nothing (the task function of `homer_sim.execution`, no state)."""
+    started, current, changed, scores = time.perf_counter(), task.cached, False, {}
+    for target in task.targets:
+        predictor, info, fresh = fit_and_tune(task.spec, task.meta, task.window_min, target, current,
+                                              task.init_state, task.progress)
+        current, changed = (predictor, info), changed or fresh
+        if task.scorer is not None:
+            scores.update(task.scorer(predictor, target))
+    assert current is not None, "a FitTask has at least one target"
+    return FitResult(task.key, task.checkpoint, *current, changed, scores, time.perf_counter() - started)
 
 
 def used_objects(days: Sequence[Day]) -> np.ndarray:
@@ -178,12 +252,14 @@ def score_windows(predictor: Predictor, queries: Queries, windows_min: Sequence[
 
 def evaluate(data: str | Path, methods: Sequence[str], window_min: int = HEADLINE_WINDOW_MIN,
              checkpoints: str | Path | None = None, households: Sequence[str] | None = None,
-             train_days: int | None = None, progress: bool = True, metric: str = "paper") -> dict:
+             train_days: int | None = None, progress: bool = True, metric: str = "paper",
+             backend: Backend = IN_PROCESS) -> dict:
     """The `homer evaluate` result: per method, scores averaged over households (see DESIGN.md).
 
     metric "paper" (the paper's table at `window_min`), "f1" (SLaTe-PRO's relocation F1, 10 .. 60 minutes) or
     "both"; each is scored with the tunables chosen on validation days for that metric. Keys: "methods"[name] (means
-    over households; "f1" as in summarise_f1) and "per_household"[household][name].
+    over households; "f1" as in summarise_f1) and "per_household"[household][name]. Each household and method is
+    one task on `backend` (this process, local processes or Ray); checkpoints are written here.
     """
     if metric not in (*TARGETS, "both"):
         raise ModelError(f"unknown metric {metric!r}; known: {', '.join(TARGETS)}, both")
@@ -192,36 +268,52 @@ def evaluate(data: str | Path, methods: Sequence[str], window_min: int = HEADLIN
     methods = [check_method(m) for m in methods]
     folder = Path(checkpoints) if checkpoints is not None else dataset.root / "checkpoints"
     names = list(households or dataset.meta.households)
-    per_house: dict[str, dict[str, dict]] = {m: {} for m in methods}
+
+    def tasks() -> Iterator[FitTask]:
+        for house in names:
+            fit, val, test, pool = household_split(dataset, house, train_days)
+            for method in methods:
+                spec = FitSpec(method, tuple(fit), tuple(val))
+                yield fit_task(f"{house}/{method}", spec, dataset.meta, window_min, spec.path(folder, house),
+                               targets, partial(score_household, (test, pool), window_min),
+                               progress and backend == IN_PROCESS)
+
+    done: dict[str, dict] = {}
     bar = tqdm(total=len(names) * len(methods), desc="evaluate", unit="fit", disable=not progress)
-    for house in names:
-        fit, val, test, pool = household_split(dataset, house, train_days)
-        for method in methods:
-            bar.set_postfix(household=house, method=method)
-            spec = FitSpec(method, tuple(fit), tuple(val))
-            per_house[method][house] = household_scores(spec, dataset.meta, (test, pool), window_min,
-                                                        spec.path(folder, house), targets, progress)
+    with backend.run(run_fit, tasks(), type(None), cpus_per_task=TORCH_THREADS) as run:
+        for result in run:
+            result.save()
+            done[result.key] = result.scores
+            bar.set_postfix(fit=result.key)
             bar.update()
     bar.close()
+    per_house = {m: {h: done[f"{h}/{m}"] for h in names} for m in methods}
     return {"window_min": window_min, "households": names, "train_days": train_days, "metric": metric,
             "methods": {m: summarise(per_house[m]) for m in methods},
-            "per_household": {h: {m: per_house[m][h] for m in methods} for h in names}}
+            "per_household": {h: {m: per_house[m][h] for m in methods} for h in names}, "execution": run.usage()}
 
 
 def household_scores(spec: FitSpec, meta: DatasetMeta, test: tuple[list[Day], np.ndarray], window_min: int,
                      path: Path | None, targets: Sequence[str], progress: bool = True) -> dict:
-    """One method on one household's test days (and its used-object pool), for each target metric."""
+    """One method on one household's test days (and its used-object pool), for each target metric, in this
+    process (the checkpoint at `path` read and written)."""
+    task = fit_task(spec.method, spec, meta, window_min, path, tuple(targets), partial(score_household, test,
+                                                                                         window_min), progress)
+    result = run_fit(None, task)
+    result.save()
+    return result.scores
+
+
+def score_household(test: tuple[list[Day], np.ndarray], window_min: int, predictor: Predictor, target: str) -> dict:
+    """A predictor tuned for `target` on a household's test days and used-object pool: the paper's percentages at
+    `window_min` (target "paper") or {"f1": SLaTe-PRO's relocation F1} (target "f1")."""
     days, pool = test
-    out: dict = {}
-    for target in targets:
-        predictor, _ = fit_tuned(spec, meta, window_min, path, progress, target)
-        if target == "f1":
-            out["f1"] = f1_result(predictor, days)
-            continue
-        queries = day_queries(days, window_steps(window_min, meta.grid_min))
-        counts, pooled = score_windows(predictor, queries, [window_min], meta.grid_min, pool)[window_min]
-        out.update(household_result(counts, pooled, predictor.params))
-    return out
+    if target == "f1":
+        return {"f1": f1_result(predictor, days)}
+    grid_min = predictor.meta.grid_min
+    queries = day_queries(days, window_steps(window_min, grid_min))
+    counts, pooled = score_windows(predictor, queries, [window_min], grid_min, pool)[window_min]
+    return household_result(counts, pooled, predictor.params)
 
 
 def f1_result(predictor: Predictor, days: Sequence[Day]) -> dict:

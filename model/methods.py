@@ -59,10 +59,11 @@ def save_predictor(path: str | Path, predictor: Predictor, info: dict | None = N
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     config = predictor.config.to_dict() if isinstance(predictor, GNNPredictor) else None
+    # the arrays are copied: those of a predictor that came back from a Ray task are read-only
     blob = {"format": CHECKPOINT_FORMAT, "method": predictor.method, "params": dict(predictor.params),
             "nodes": list(predictor.meta.nodes), "categories": list(predictor.meta.categories),
             "movable": [bool(m) for m in predictor.meta.movable], "config": config,
-            "arrays": {k: torch.as_tensor(np.ascontiguousarray(v)) for k, v in predictor.state().items()},
+            "arrays": {k: torch.as_tensor(np.array(v, order="C")) for k, v in predictor.state().items()},
             "info": info or {}}
     tmp = path.with_name(path.name + ".tmp")
     torch.save(blob, tmp)

@@ -153,8 +153,8 @@ class GNNPredictor(Predictor):
         """As Predictor.rollout, in torch and in chunks of ROLLOUT_CHUNK graphs."""
         keep_freed_memory()
         torch.set_num_threads(min(TORCH_THREADS, torch.get_num_threads()))
-        parent_t = torch.as_tensor(np.asarray(parent, dtype=np.int64))
-        minute_t = torch.as_tensor(np.asarray(minute, dtype=np.float32))
+        parent_t = torch.as_tensor(np.array(parent, dtype=np.int64))  # a copy: Ray hands tasks read-only arrays
+        minute_t = torch.as_tensor(np.array(minute, dtype=np.float32))
         chunks = []
         for start in range(0, len(parent_t), ROLLOUT_CHUNK):
             chunk = slice(start, start + ROLLOUT_CHUNK)

@@ -3,9 +3,9 @@
 Per household, the predictor is fitted on the dataset's training days and tuned on their last tenth, cached as
 `homer evaluate` caches it (`model.evaluate.fit_tuned`); method `oracle` instead predicts from the unassisted
 replay of the same day (perfect prediction: what is left is manipulation). Each test day is one episode of the
-assisted-day environment (`scenarios.env`) run by Psi, in worker processes; a day's robot draws its random
-stream from (seed, household, day), so the figures do not depend on the number of workers. Each day's result is
-kept in the output folder as it finishes, so an interrupted run resumes where it stopped.
+assisted-day environment (`scenarios.env`) run by Psi, a task of `homer_sim.execution` (local or Ray); a day's
+robot draws its random stream from (seed, household, day), so the figures do not depend on the number of workers.
+Each day's result is kept in the output folder as it finishes, so an interrupted run resumes where it stopped.
 """
 
 from __future__ import annotations
@@ -13,11 +13,10 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import multiprocessing
 import statistics
 import time
 from collections import Counter
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -28,6 +27,7 @@ from homer_sim.clock import DEFAULT_WINDOW_MIN
 from homer_sim.data.dataset import Dataset
 from homer_sim.data.generate import Generator, Sources
 from homer_sim.errors import HomerError, unknown_name
+from homer_sim.execution import IN_PROCESS, Backend
 from scenarios.episodes import dataset_day_plan, predictor_for
 from scenarios.policies import OraclePredictor, PsiPolicy
 from scenarios.scoring import day_result
@@ -100,38 +100,19 @@ class DayRunner:
         return self.predictors[household]
 
 
-# --- worker pool (as homer_sim.data.generate) -----------------------------------------------------------------
-_WORKER: DayRunner | None = None
-
-
-def _init_worker(spec: EvalSpec) -> None:
-    global _WORKER
-    _WORKER = DayRunner(spec)
-
-
-def _run_task(task: tuple[str, int]) -> dict:
-    assert _WORKER is not None
-    return _WORKER.run(*task)
-
-
-def _results(spec: EvalSpec, tasks: list[tuple[str, int]], workers: int) -> Iterator[dict]:
-    if not tasks:
-        return
-    if workers <= 1:
-        runner = DayRunner(spec)
-        for task in tasks:
-            yield runner.run(*task)
-        return
-    context = multiprocessing.get_context("fork")
-    with context.Pool(min(workers, len(tasks)), initializer=_init_worker, initargs=(spec,)) as pool:
-        yield from pool.imap_unordered(_run_task, tasks, chunksize=1)
+def assist_day(runner: DayRunner, task: tuple[str, int]) -> dict:
+    """Day `task` = (household, test day index) on a worker's DayRunner: the task function of the execution
+    backend (the worker reads the dataset and the checkpoints at the spec's paths)."""
+    return runner.run(*task)
 
 
 # --- the evaluation ---------------------------------------------------------------------------------------------
 def assist_eval(spec: EvalSpec, households: Sequence[str] | None = None, days: int | None = None,
-                workers: int = 1, out: Path | None = None, progress: bool = True) -> dict:
-    """Run (or resume) the evaluation; returns the `homer assist-eval` JSON (see DESIGN.md) and writes it, the
-    markdown table and the figure into `out` (default: the checkpoint folder's `assist_eval_<method>_<key>`)."""
+                backend: Backend = IN_PROCESS, out: Path | None = None, progress: bool = True) -> dict:
+    """Run (or resume) the evaluation, each day a task on `backend` (this process, local processes or Ray: on a
+    cluster every node must see the dataset and checkpoints at their paths); returns the `homer assist-eval` JSON
+    (see DESIGN.md) and writes it, the markdown table and the figure into `out` (default: the checkpoint folder's
+    `assist_eval_<method>_<key>`), here only."""
     from tqdm import tqdm
 
     dataset = Dataset(spec.data)
@@ -151,17 +132,22 @@ def assist_eval(spec: EvalSpec, households: Sequence[str] | None = None, days: i
     todo = [t for t in tasks if t not in cached]
     bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), desc="assisted days", unit="day",
                disable=not progress, dynamic_ncols=True)
-    for result in _results(spec, todo, workers):
-        cached[(result["household"], result["day"])] = result
-        _write_json(out / "days" / f"{result['household']}_{result['day']:03d}.json", result)
-        bar.set_postfix(household=result["household"], share=result["fetch_share"])
-        bar.update()
+    from model.names import GNN_METHODS
+    from model.train import TORCH_THREADS
+
+    threads = TORCH_THREADS if spec.method in GNN_METHODS else 1  # a Ray task then runs torch as this process does
+    with backend.run(assist_day, todo, DayRunner, (spec,), cpus_per_task=threads) as run:
+        for result in run:
+            cached[(result["household"], result["day"])] = result
+            _write_json(out / "days" / f"{result['household']}_{result['day']:03d}.json", result)
+            bar.set_postfix(household=result["household"], share=result["fetch_share"])
+            bar.update()
     bar.close()
     summary = summarise(spec.method, [cached[t] for t in tasks], names)
     _write_json(out / "assist_eval.json", summary)
     (out / "assist_eval.md").write_text(markdown_table(summary))
     plot(summary, out / "assist_eval.png")
-    summary["out"] = str(out)
+    summary["out"], summary["execution"] = str(out), run.usage()
     return summary
 
 

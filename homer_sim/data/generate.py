@@ -10,9 +10,8 @@ from __future__ import annotations
 
 import json
 import logging
-import multiprocessing
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,6 +23,7 @@ from homer_sim.data.dataset import DatasetMeta, Day, day_path, write_day, write_
 from homer_sim.data.stats import LOG_NAME
 from homer_sim.days import DayKey
 from homer_sim.errors import HomerError
+from homer_sim.execution import IN_PROCESS, Backend
 from homer_sim.person.activities import load_library
 from homer_sim.person.aliases import Resolver
 from homer_sim.person.avatar import add_avatar
@@ -43,6 +43,11 @@ class Sources:
 
     habits: str | None = None
     scripts: str | None = None
+
+    def absolute(self) -> Sources:
+        """The same sources with absolute paths, for workers that run elsewhere (on a cluster, every node must
+        see the folders at these paths)."""
+        return Sources(*(str(Path(p).resolve()) if p else None for p in (self.habits, self.scripts)))
 
 
 class Generator:
@@ -117,18 +122,9 @@ def world_meta(world: World, households: list[str], extra: dict) -> DatasetMeta:
                        tuple(households), extra=extra)
 
 
-# --- worker pool ------------------------------------------------------------------------------------------
-_WORKER: Generator | None = None
-
-
-def _init_worker(sources: Sources) -> None:
-    global _WORKER
-    _WORKER = Generator(sources)
-
-
-def _run_task(task: tuple) -> tuple[Day, dict]:
-    assert _WORKER is not None
-    return _WORKER.simulate(*task)
+def simulate_task(generator: Generator, task: tuple) -> tuple[Day, dict]:
+    """One day of `day_tasks` on a worker's Generator: the task function of the execution backend."""
+    return generator.simulate(*task)
 
 
 def day_tasks(households: list[str], train_days: int, test_days: int, seed: int) -> list[tuple[str, DayKey]]:
@@ -137,9 +133,10 @@ def day_tasks(households: list[str], train_days: int, test_days: int, seed: int)
             for split, count in (("train", train_days), ("test", test_days)) for d in range(count)]
 
 
-def generate(out: Path, n_households: int, train_days: int, test_days: int, seed: int, workers: int = 1,
-             sources: Sources = Sources(), progress: bool = True) -> dict:
-    """Generate (or resume) a dataset folder; returns a summary."""
+def generate(out: Path, n_households: int, train_days: int, test_days: int, seed: int,
+             backend: Backend = IN_PROCESS, sources: Sources = Sources(), progress: bool = True) -> dict:
+    """Generate (or resume) a dataset folder with the days run on `backend` (local processes or Ray tasks) and
+    written here; returns a summary with where the days ran (`execution`)."""
     out = Path(out)
     probe = Generator(sources)
     names = list(probe.households)[:n_households]
@@ -154,23 +151,16 @@ def generate(out: Path, n_households: int, train_days: int, test_days: int, seed
     tasks = [(house, key) for house, key in day_tasks(names, train_days, test_days, seed)
              if not day_path(out, house, key.split, key.index).exists()]
     started = time.perf_counter()
-    with open(out / LOG_NAME, "a") as log_file:
-        for day, info in _progress(_results(tasks, workers, sources, probe), len(tasks), progress):
+    with (open(out / LOG_NAME, "a") as log_file,
+          backend.run(simulate_task, tasks, Generator, (sources.absolute(),), probe) as run):
+        for day, info in _progress(run, len(tasks), progress):
             write_day(out, day)
             log_file.write(json.dumps(info, sort_keys=True) + "\n")
             log_file.flush()
+    usage = run.usage()
+    log.info("%d days on %d %s workers (%d nodes)", len(tasks), usage["workers"], usage["mode"], usage["nodes"])
     return {"out": str(out), "days_written": len(tasks), "households": names,
-            "wall_s": round(time.perf_counter() - started, 2)}
-
-
-def _results(tasks: list[tuple], workers: int, sources: Sources, probe: Generator) -> Iterator[tuple[Day, dict]]:
-    if workers <= 1:
-        for task in tasks:
-            yield probe.simulate(*task)
-        return
-    context = multiprocessing.get_context("fork")
-    with context.Pool(workers, initializer=_init_worker, initargs=(sources,)) as pool:
-        yield from pool.imap_unordered(_run_task, tasks, chunksize=1)
+            "wall_s": round(time.perf_counter() - started, 2), "execution": usage}
 
 
 def _progress(results, total: int, enabled: bool):

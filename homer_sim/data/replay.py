@@ -3,7 +3,7 @@ apartment at the scripts' minutes, written as dataset days (`homer_sim.data.data
 
 One day is one task: the person starts the day from the start layout, each action runs at its minute through the
 executor (as generation does), the scene graph is read every 10 minutes. A day's random stream (free spots) is
-seeded from its split and number, so a day gives the same bytes whatever the worker count. Days are written
+seeded from its split and number, so a day gives the same bytes whatever the worker count or backend. Days are written
 atomically; an interrupted run resumes with the days not yet written. A day that cannot run (a name our apartment
 lacks, an action that fails) is logged with its reason in `generation.log` and the run goes on.
 """
@@ -11,10 +11,9 @@ lacks, an action that fails) is logged with its reason in `generation.log` and t
 from __future__ import annotations
 
 import json
-import multiprocessing
 import time
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +25,7 @@ from homer_sim.data.dataset import SPLITS, DatasetMeta, Day, day_path, write_day
 from homer_sim.data.generate import world_meta
 from homer_sim.data.stats import LOG_NAME
 from homer_sim.errors import HomerError
+from homer_sim.execution import IN_PROCESS, Backend
 from homer_sim.person.aliases import Resolver
 from homer_sim.person.avatar import add_avatar
 from homer_sim.person.day_scripts import DayScript, read_day_script
@@ -123,27 +123,9 @@ class Replayer:
         return world_meta(self.world, households, extra)
 
 
-_WORKER: Replayer | None = None
-
-
-def _init_worker() -> None:
-    global _WORKER
-    _WORKER = Replayer()
-
-
-def _run_task(task: DayTask) -> tuple[DayTask, Day | None, dict]:
-    assert _WORKER is not None
-    return _WORKER.run(task)
-
-
-def run_tasks(tasks: list[DayTask], workers: int, probe: Replayer) -> Iterator[tuple[DayTask, Day | None, dict]]:
-    """Each task's result, in order with one worker, as they finish with more (forked processes)."""
-    if workers <= 1:
-        for task in tasks:
-            yield probe.run(task)
-        return
-    with multiprocessing.get_context("fork").Pool(workers, initializer=_init_worker) as pool:
-        yield from pool.imap_unordered(_run_task, tasks, chunksize=1)
+def replay_task(replayer: Replayer, task: DayTask) -> tuple[DayTask, Day | None, dict]:
+    """One day of `replay` on a worker's Replayer: the task function of the execution backend."""
+    return replayer.run(task)
 
 
 def _check_existing(out: Path, meta: DatasetMeta) -> None:
@@ -157,15 +139,15 @@ def _check_existing(out: Path, meta: DatasetMeta) -> None:
         raise HomerError(f"{out} exists and is not a homer-sim dataset; choose an empty or new folder")
 
 
-def replay(scripts: str | Path, out: str | Path, workers: int = 1, household: str | None = None,
+def replay(scripts: str | Path, out: str | Path, backend: Backend = IN_PROCESS, household: str | None = None,
            progress: bool = True) -> dict:
-    """Replay every day script at `scripts` into the dataset folder `out` (resuming an interrupted run).
+    """Replay every day script at `scripts` into the dataset folder `out` (resuming an interrupted run), the days
+    lived on `backend` (this process, local processes or Ray tasks: on a cluster every node must see the scripts
+    at their absolute paths) and written here.
 
-    Returns {"days": scripts found, "completed": days in the folder, "failed": {day: reason}}."""
-    if workers < 1:
-        raise HomerError(f"--workers must be at least 1, not {workers}")
+    Returns {"days": scripts found, "completed": days in the folder, "failed": {day: reason}, "execution"}."""
     out = Path(out)
-    tasks = find_day_scripts(scripts, household)
+    tasks = [replace(task, path=task.path.resolve()) for task in find_day_scripts(scripts, household)]
     probe = Replayer()
     meta = probe.meta([tasks[0].household], {"replay": {"scripts": str(Path(scripts).resolve()),
                                                         "homer_sim": __version__}})
@@ -173,9 +155,8 @@ def replay(scripts: str | Path, out: str | Path, workers: int = 1, household: st
     write_meta(out, meta)
     todo = [t for t in tasks if not day_path(out, t.household, t.split, t.index).exists()]
     failed = {}
-    with open(out / LOG_NAME, "a") as log_file:
-        results = run_tasks(todo, workers, probe)
-        for task, day, info in tqdm(results, total=len(todo), desc="days", unit="day", disable=not progress):
+    with open(out / LOG_NAME, "a") as log_file, backend.run(replay_task, todo, Replayer, (), probe) as run:
+        for task, day, info in tqdm(run, total=len(todo), desc="days", unit="day", disable=not progress):
             if day is not None:
                 write_day(out, day)
             else:
@@ -183,4 +164,5 @@ def replay(scripts: str | Path, out: str | Path, workers: int = 1, household: st
             log_file.write(json.dumps(info, sort_keys=True) + "\n")
             log_file.flush()
     completed = sum(day_path(out, t.household, t.split, t.index).exists() for t in tasks)
-    return {"days": len(tasks), "completed": completed, "failed": dict(sorted(failed.items()))}
+    return {"days": len(tasks), "completed": completed, "failed": dict(sorted(failed.items())),
+            "execution": run.usage()}

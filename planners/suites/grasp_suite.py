@@ -20,18 +20,21 @@ import logging
 import math
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from homer_sim.errors import HomerError
+from homer_sim.execution import IN_PROCESS, Backend
 from homer_sim.graph import INSIDE
 from homer_sim.home.apartment import default_layout
 from homer_sim.home.catalog import CATALOG, FAMILIES
 from planners.suites.collateral import collateral_reason, displaced
 
 if TYPE_CHECKING:
+    from homer_sim.recording import RecordedWorld
     from homer_sim.world import World
     from planners.skills import Robot
 
@@ -54,7 +57,7 @@ QUICK_TRIALS = 1
 
 @dataclass(frozen=True)
 class TrialResult:
-    """One pick of one object: success, why not, the lift (m) and slip (m) measured, wall time (s)."""
+    """One pick of one object: success, why not, the lift (m) and slip (m) measured, wall time (s), trial number."""
 
     cls: str
     success: bool
@@ -63,6 +66,7 @@ class TrialResult:
     slip_m: float
     wall_s: float
     collateral: bool = False  # an otherwise successful pick that moved another object (`suites.collateral`)
+    trial: int = 0
 
 
 def suite_classes() -> tuple[dict[str, str], dict[str, str]]:
@@ -192,8 +196,6 @@ def _relative_position(world: World, name: str) -> np.ndarray:
 
 def run_trial(world: World, cls: str, name: str, rng: np.random.Generator) -> TrialResult:
     """Set the scene up (see the module doc), pick `name` of class `cls`, hold it HOLD_SECONDS, measure."""
-    from homer_sim.errors import HomerError
-
     started = time.perf_counter()
     world.reset_settled()
     _open_holder(world, name)
@@ -230,44 +232,73 @@ def run_trial(world: World, cls: str, name: str, rng: np.random.Generator) -> Tr
 
 
 # --- the suite ------------------------------------------------------------------------------------------
+def suite_world() -> RecordedWorld:
+    """The suite's world: the apartment with the robot, its settled start computed (a worker's state)."""
+    from homer_sim.recording import RecordedWorld
+    from planners.robot import add_robot
+
+    world = RecordedWorld(extras=[add_robot])
+    world.reset_settled()  # the settled start is computed once, before the recorded clock starts
+    return world
+
+
+def suite_trial(world: RecordedWorld, run: tuple[str, str, int, int]) -> TrialResult:
+    """Trial k of class `cls` (instance `name`) with seed `seed`, run = (cls, name, seed, k), on a suite world;
+    its random stream comes from (seed, class, k) alone. A recording world gets the outcome as an event and
+    its physics clock moved past the trial."""
+    cls, name, seed, k = run
+    outcome = replace(run_trial(world, cls, name, np.random.default_rng([seed, stable_hash(cls), k])), trial=k)
+    if world.recording is not None:
+        world.recording.log_event(describe(outcome), level="INFO" if outcome.success else "WARN")
+        world.physics_offset += float(world.data.time)
+    return outcome
+
+
+def describe(outcome: TrialResult) -> str:
+    """One line for the log: class, trial, ok or why not, lift, slip and wall time."""
+    return (f"{outcome.cls} trial {outcome.trial}: " + ("ok" if outcome.success else f"FAILED {outcome.reason}")
+            + f" (lift {outcome.lift_m:.3f} m, slip {outcome.slip_m:.4f} m, {outcome.wall_s:.1f} s)")
+
+
 def run_suite(quick: bool = False, trials: int | None = None, seed: int = 0, progress: bool = True,
-              classes: dict[str, str] | None = None, rrd: Path | None = None) -> dict:
+              classes: dict[str, str] | None = None, rrd: Path | None = None, backend: Backend = IN_PROCESS) -> dict:
     """Run `trials` picks of every included class (or of the quick subset, or of `classes`: {class:
-    instance}) and summarise them as the `grasp-suite` JSON object. Each trial's random stream is seeded from
-    (seed, class name, trial number), so a class's trials do not depend on which other classes run. With `rrd`,
-    every trial is recorded there, one after the other on the physics clock, each outcome as an event."""
+    instance}) on `backend` (local processes or Ray tasks) and summarise them as the `grasp-suite` JSON object.
+    Each trial's random stream is seeded from (seed, class name, trial number), so a trial does not depend on
+    which other trials run, nor where. With `rrd` (in this process only), every trial is recorded there, one
+    after the other on the physics clock, each outcome as an event."""
     from tqdm import tqdm
 
-    from homer_sim.recording import RecordedWorld, Recording
-    from planners.robot import add_robot
+    from homer_sim.recording import Recording
 
     included, excluded = suite_classes()
     chosen = classes if classes is not None else (quick_subset(included) if quick else included)
     trials = trials if trials is not None else (QUICK_TRIALS if quick else DEFAULT_TRIALS)
-    world = RecordedWorld(extras=[add_robot])
-    world.reset_settled()  # the settled start is computed once, before the recorded clock starts
+    runs = [(cls, name, seed, k) for cls, name in chosen.items() for k in range(trials)]
+    world = None
     if rrd is not None:
+        if backend != IN_PROCESS:
+            raise HomerError(f"a recording ({rrd}) holds the trials one after the other in one world; drop "
+                             "--workers and --ray to record")
+        world = suite_world()
         world.recording = Recording(rrd)
         world.recording.log_geometry(world.model, world.data)
     started = time.perf_counter()
-    runs = [(cls, name, k) for cls, name in chosen.items() for k in range(trials)]
     results: list[TrialResult] = []
     try:
-        for cls, name, k in tqdm(runs, desc="grasp suite", unit="trial", disable=not progress, file=sys.stderr):
-            rng = np.random.default_rng([seed, stable_hash(cls), k])
-            outcome = run_trial(world, cls, name, rng)
-            text = (f"{cls} trial {k}: " + ("ok" if outcome.success else f"FAILED {outcome.reason}")
-                    + f" (lift {outcome.lift_m:.3f} m, slip {outcome.slip_m:.4f} m, {outcome.wall_s:.1f} s)")
-            log.info(text)
-            if world.recording is not None:
-                world.recording.log_event(text, level="INFO" if outcome.success else "WARN")
-                world.physics_offset += float(world.data.time)
-            results.append(outcome)
+        with backend.run(suite_trial, runs, suite_world, local_state=world) as trial_runs:
+            for outcome in tqdm(trial_runs, total=len(runs), desc="grasp suite", unit="trial", disable=not progress,
+                                file=sys.stderr):
+                log.info(describe(outcome))
+                results.append(outcome)
     finally:  # what was recorded stays readable when a trial raises
-        if world.recording is not None:
+        if world is not None and world.recording is not None:
             world.recording.close()
+    order = {cls: i for i, cls in enumerate(chosen)}
+    results.sort(key=lambda r: (order[r.cls], r.trial))
     return summarise(results, excluded, len(included) + len(excluded), time.perf_counter() - started,
-                     {"quick": quick, "seed": seed, "trials_per_class": trials, "rrd": str(rrd) if rrd else None})
+                     {"quick": quick, "seed": seed, "trials_per_class": trials, "rrd": str(rrd) if rrd else None,
+                      "execution": trial_runs.usage()})
 
 
 def stable_hash(text: str) -> int:
@@ -279,7 +310,7 @@ def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: i
               extra: dict) -> dict:
     """The `grasp-suite` JSON object from trial results: `trials`, `overall`, `per_class` and `excluded` keep
     their meaning for scripts; `collateral` counts the trials failed only because another object moved; failure
-    reasons per class and timing are extra keys."""
+    reasons per class, every trial's outcome and timing are extra keys."""
     per_class: dict[str, dict] = {}
     for r in results:
         entry = per_class.setdefault(r.cls, {"trials": 0, "successes": 0, "failures": [],
@@ -305,6 +336,9 @@ def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: i
         "meets_targets": bool(results) and successes / len(results) >= TARGET_OVERALL
         and min(rates) >= TARGET_CLASS,
         "median_trial_wall_s": float(np.median([r.wall_s for r in results])) if results else 0.0,
+        "results": [{"class": r.cls, "trial": r.trial, "success": r.success, "reason": r.reason, "lift_m": r.lift_m,
+                     "slip_m": None if math.isnan(r.slip_m) else r.slip_m, "collateral": r.collateral}
+                    for r in results],
         "wall_s": wall_s,
         **extra,
     }
@@ -313,8 +347,6 @@ def summarise(results: list[TrialResult], excluded: dict[str, str], n_classes: i
 def chosen_classes(names: list[str]) -> dict[str, str]:
     """{class: the instance the suite picks} for the included classes `names`; a HomerError names an unknown or
     excluded one and lists the valid names."""
-    from homer_sim.errors import HomerError
-
     included, excluded = suite_classes()
     for name in names:
         if name not in included:

@@ -31,6 +31,7 @@ import numpy as np
 
 from homer_sim.clock import GRID_MIN
 from homer_sim.data.dataset import Dataset, Day
+from homer_sim.execution import IN_PROCESS, Backend
 from homer_sim.home.catalog import CATALOG
 from planners.suites.collateral import collateral_reason, displaced
 from planners.suites.grasp_suite import stable_hash
@@ -252,10 +253,18 @@ def _rides_on(graph, node: str, carrier: str) -> bool:
 
 
 # --- the suite ------------------------------------------------------------------------------------------
+def relocation_trial(bench: Bench, trial: tuple[Occurrence, str, int]) -> TripleResult:
+    """Trial = (occurrence, its object's class, seed) on a worker's Bench: the task function of the execution
+    backend; the random stream comes from (seed, triple) alone."""
+    occurrence, cls, seed = trial
+    return run_triple(bench, occurrence, cls, np.random.default_rng([seed, stable_hash(occurrence.triple)]))
+
+
 def run_relocations(data: Path, quick: bool = False, seed: int = 0, progress: bool = True,
-                    households: list[str] | None = None) -> dict:
-    """Try every triple of the dataset at `data` (or the quick subset) and summarise as one JSON object. Each
-    triple's random stream is seeded from (seed, triple), so a triple does not depend on which others run."""
+                    households: list[str] | None = None, backend: Backend = IN_PROCESS) -> dict:
+    """Try every triple of the dataset at `data` (or the quick subset) on `backend` (this process, local
+    processes or Ray: on a cluster every node must see the dataset at `data`) and summarise as one JSON object.
+    Each triple's random stream is seeded from (seed, triple), so a triple does not depend on which others run."""
     from tqdm import tqdm
 
     bench = Bench(data)
@@ -266,14 +275,17 @@ def run_relocations(data: Path, quick: bool = False, seed: int = 0, progress: bo
     if quick:
         tried = quick_subset(tried, classes)
     started = time.perf_counter()
-    results = []
-    for occurrence in tqdm(tried, desc="relocation suite", unit="triple", disable=not progress, file=sys.stderr):
-        rng = np.random.default_rng([seed, stable_hash(occurrence.triple)])
-        outcome = run_triple(bench, occurrence, classes[occurrence.obj], rng)
-        log.info("%s: %s (%.1f s)", occurrence.triple, "ok" if outcome.success else outcome.reason, outcome.wall_s)
-        results.append(outcome)
-    return summarise(results, excluded, time.perf_counter() - started, {"quick": quick, "seed": seed,
-                                                                         "data": str(data), "triples": len(found)})
+    trials = [(occurrence, classes[occurrence.obj], seed) for occurrence in tried]
+    done: dict[str, TripleResult] = {}
+    with backend.run(relocation_trial, trials, Bench, (Path(data).resolve(),), bench) as run:
+        for outcome in tqdm(run, total=len(trials), desc="relocation suite", unit="triple", disable=not progress,
+                            file=sys.stderr):
+            log.info("%s: %s (%.1f s)", outcome.occurrence.triple, "ok" if outcome.success else outcome.reason,
+                     outcome.wall_s)
+            done[outcome.occurrence.triple] = outcome
+    return summarise([done[o.triple] for o in tried], excluded, time.perf_counter() - started,
+                     {"quick": quick, "seed": seed, "data": str(data), "triples": len(found),
+                      "execution": run.usage()})
 
 
 def summarise(results: list[TripleResult], excluded: dict[str, str], wall_s: float, extra: dict) -> dict:

@@ -9,20 +9,21 @@ from pathlib import Path
 from homer_sim.clock import clock_text
 from homer_sim.days import DayKey
 from homer_sim.errors import HomerError
-from scenarios.cli.common import emit, positive_int
+from homer_sim.execution import IN_PROCESS
+from scenarios.cli.common import add_backend_arguments, backend_from_args, describe_usage, emit
 
 
 def cmd_generate(args: argparse.Namespace) -> int:
     from homer_sim.data.generate import Sources, generate
 
-    for name in ("households", "train_days", "test_days", "workers"):
-        if getattr(args, name) < (1 if name in ("households", "workers") else 0):
+    for name in ("households", "train_days", "test_days"):
+        if getattr(args, name) < (1 if name == "households" else 0):
             raise HomerError(f"--{name.replace('_', '-')} must be positive, not {getattr(args, name)}")
     sources = Sources(str(args.habits) if args.habits else None, str(args.scripts) if args.scripts else None)
-    result = generate(args.out, args.households, args.train_days, args.test_days, args.seed, args.workers, sources,
-                      progress=not args.json)
+    result = generate(args.out, args.households, args.train_days, args.test_days, args.seed, backend_from_args(args),
+                      sources, progress=not args.json)
     emit(result, args.json, [f"wrote {result['days_written']} days for {', '.join(result['households'])} "
-                               f"to {result['out']} in {result['wall_s']} s"])
+                             f"to {result['out']} in {result['wall_s']} s ({describe_usage(result['execution'])})"])
     return 0
 
 def cmd_dataset_stats(args: argparse.Namespace) -> int:
@@ -80,7 +81,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
     from homer_sim.data.replay import DayTask, Replayer, find_day_scripts, replay
 
     if args.rrd is None:
-        result = replay(args.scripts, args.out, args.workers, args.household, progress=not args.json)
+        result = replay(args.scripts, args.out, backend_from_args(args), args.household, progress=not args.json)
         lines = [f"{result['completed']} of {result['days']} days in {args.out}"]
         lines += [f"  {day}: {reason}" for day, reason in result["failed"].items()]
         emit(result, args.json, lines)
@@ -88,6 +89,8 @@ def cmd_replay(args: argparse.Namespace) -> int:
     from homer_sim.data.dataset import write_day, write_meta
     from homer_sim.recording import Recording
 
+    if backend_from_args(args) != IN_PROCESS:
+        raise HomerError("--rrd records one day in this process; drop --workers and --ray")
     tasks = find_day_scripts(args.scripts, args.household)
     if len(tasks) != 1:
         raise HomerError(f"--rrd records one day; {args.scripts} holds {len(tasks)} day scripts: give one NNN.txt")
@@ -135,7 +138,7 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     gen.add_argument("--test-days", type=int, default=10, help="test days per household (10)")
     gen.add_argument("--seed", type=int, default=0, help="dataset seed (0)")
     gen.add_argument("--out", type=Path, required=True, help="dataset folder (created; an interrupted run resumes)")
-    gen.add_argument("--workers", type=int, default=1, help="worker processes (1); bytes do not depend on it")
+    add_backend_arguments(gen, "days")
     gen.add_argument("--habits", type=Path, default=None,
                      help="households from a HOMER personaBasedSchedules folder instead of ours")
     gen.add_argument("--scripts", type=Path, default=None,
@@ -171,7 +174,7 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
         "its split. A day that cannot run is reported with its reason and the run goes on; exit status 1 then.")
     rep.add_argument("scripts", type=Path, help="a HouseholdX folder, a folder of NNN.txt day scripts, or one file")
     rep.add_argument("--out", type=Path, required=True, help="dataset folder (created; an interrupted run resumes)")
-    rep.add_argument("--workers", type=positive_int, default=1, help="worker processes (1); bytes do not depend on it")
+    add_backend_arguments(rep, "days")
     rep.add_argument("--household", default=None, help="household name (default: the HouseholdX folder's name)")
     rep.add_argument("--rrd", type=Path, default=None, help="record the day with rerun here (one day script only)")
     rep.add_argument("--json", action="store_true", help='print {"days", "completed", "failed": {day: reason}}')

@@ -3,7 +3,7 @@
 Each area's commands live beside this module (`world`, `data`, `model`, `robot`, `runs`), each adding its
 subcommands with `add_commands(subparsers)`; command functions import heavy code (torch, mujoco) when they
 run, so `homer --help` stays fast. Every command has --help; --json prints one JSON object on stdout. Exit
-status 0 on success, 1 when a check fails, 2 on bad input (a HomerError).
+status 0 on success, 1 when a check fails, 2 on bad input (a HomerError), 130 when interrupted (Ctrl-C).
 """
 
 from __future__ import annotations
@@ -38,6 +38,10 @@ def main(argv: list[str] | None = None) -> int:
     except HomerError as error:
         print(f"homer: error: {error}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # every file is written atomically: what is there is complete
+        print("homer: interrupted; files written so far are complete (generate resumes where it stopped)",
+              file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

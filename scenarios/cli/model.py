@@ -12,6 +12,7 @@ from pathlib import Path
 from homer_sim.clock import DEFAULT_WINDOW_MIN as HEADLINE_WINDOW_MIN
 from model.names import DEFAULT_METHODS, METHODS
 from model.report import format_f1_table, format_table
+from scenarios.cli.common import add_backend_arguments, backend_from_args
 
 
 def _methods(text: str) -> list[str]:
@@ -55,6 +56,7 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     evaluate.add_argument("--metric", choices=("paper", "f1", "both"), default="paper",
                           help="paper: used/unused object percentages at --window; f1: SLaTe-PRO's relocation F1 "
                           "per lookahead step 10..60 min; both (default paper; each tuned for its own metric)")
+    add_backend_arguments(evaluate, "fits (one per household and method)")
     evaluate.add_argument("--quiet", action="store_true", help="no progress bars on stderr")
     evaluate.add_argument("--json", action="store_true", help="print one JSON object")
     evaluate.set_defaults(func=cmd_evaluate)
@@ -86,7 +88,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 
     households = [h.strip() for h in args.households.split(",")] if args.households else None
     result = evaluate(args.data, args.methods, args.window, args.checkpoints, households, args.train_days,
-                      progress=not args.quiet, metric=args.metric)
+                      progress=not args.quiet, metric=args.metric,
+                      backend=backend_from_args(args))
     tables = [t for t, on in ((format_table, args.metric != "f1"), (format_f1_table, args.metric != "paper")) if on]
     print(json.dumps(result) if args.json else "\n\n".join(table(result) for table in tables))
     return 0

@@ -20,7 +20,7 @@ from planners.suites.grasp_suite import (
     run_suite,
 )
 from planners.suites.relocation_suite import format_relocations, run_relocations
-from scenarios.cli.common import emit, positive_int
+from scenarios.cli.common import add_backend_arguments, backend_from_args, emit, positive_int
 
 
 def add_commands(subparsers: argparse._SubParsersAction) -> None:
@@ -38,6 +38,7 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
                        help=f"trials per class ({DEFAULT_TRIALS}; {QUICK_TRIALS} with --quick)")
     suite.add_argument("--seed", type=int, default=0, help="seed of the start-pose randomisation (0)")
     suite.add_argument("--classes", nargs="+", metavar="CLASS", help="only these object classes (default: all)")
+    add_backend_arguments(suite, "trials")
     suite.add_argument("--relocations", action="store_true",
                        help="the relocation suite instead of picks (needs --data; --quick: a few triples)")
     suite.add_argument("--data", type=Path, help="dataset folder made by `homer generate` (with --relocations)")
@@ -51,7 +52,7 @@ def cmd_grasp_suite(args: argparse.Namespace) -> int:
     if args.relocations or args.data:
         return _relocations(args)
     result = run_suite(quick=args.quick, trials=args.trials, seed=args.seed, progress=not args.quiet,
-                       classes=chosen_classes(args.classes) if args.classes else None)
+                       classes=chosen_classes(args.classes) if args.classes else None, backend=backend_from_args(args))
     if args.json:
         print(json.dumps(result))
     else:
@@ -63,6 +64,6 @@ def _relocations(args: argparse.Namespace) -> int:
     if not (args.relocations and args.data):
         raise HomerError("--relocations and --data DIR go together (the relocation suite reads a dataset's days)")
     result = run_relocations(args.data, quick=args.quick, seed=args.seed, progress=not args.quiet,
-                             households=args.households)
+                             households=args.households, backend=backend_from_args(args))
     emit(result, args.json, [format_relocations(result)])
     return 0 if result["meets_targets"] else 1

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from model.names import METHODS
 from scenarios.breakfast_data import DataSpec
-from scenarios.cli.common import emit, positive_int
+from scenarios.cli.common import add_backend_arguments, backend_from_args, emit, positive_int
 from scenarios.registry import SCENARIOS
 
 
@@ -66,7 +66,7 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     evaluate.add_argument("--days", type=positive_int, default=None, help="only the first N test days of each")
     evaluate.add_argument("--method", default=DataSpec.method, choices=(*METHODS, "oracle"), metavar="METHOD",
                           help=f"predictor ({', '.join(METHODS)}) or oracle (default {DataSpec.method})")
-    evaluate.add_argument("--workers", type=positive_int, default=1, help="days run in parallel processes")
+    add_backend_arguments(evaluate, "assisted days")
     evaluate.add_argument("--seed", type=int, default=0, help="seed of the robot's random streams (default 0)")
     evaluate.add_argument("--window", type=positive_int, default=DataSpec.window_min,
                           help=f"prediction window in minutes (default {DataSpec.window_min})")
@@ -104,7 +104,7 @@ def cmd_assist_eval(args: argparse.Namespace) -> int:
     spec = EvalSpec(str(args.data), args.method, args.seed, args.window,
                     str(args.checkpoints) if args.checkpoints else None, args.until)
     households = [h.strip() for h in args.households.split(",") if h.strip()] if args.households else None
-    result = assist_eval(spec, households, args.days, args.workers, args.out, progress=not args.quiet)
+    result = assist_eval(spec, households, args.days, backend_from_args(args), args.out, progress=not args.quiet)
     emit(result, args.json, [markdown_table(result), f"written to {result['out']}"])
     return 0
 

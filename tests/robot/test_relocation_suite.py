@@ -28,7 +28,7 @@ FULL_DATA = Path(os.environ.get("HOMER_SIM_RELOCATION_DATA", Path.home() / ".cac
 def one_day(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """One household's one training day (household_a, seed 0)."""
     out = tmp_path_factory.mktemp("relocation_data")
-    generate(out, n_households=1, train_days=1, test_days=0, seed=0, workers=1, progress=False)
+    generate(out, n_households=1, train_days=1, test_days=0, seed=0, progress=False)
     return out
 
 

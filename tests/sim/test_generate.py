@@ -14,6 +14,7 @@ from homer_sim.data.generate import Generator, Sources, generate
 from homer_sim.data.stats import dataset_stats
 from homer_sim.days import DayKey
 from homer_sim.errors import HomerError
+from homer_sim.execution import Backend
 
 pytestmark = pytest.mark.physics  # steps a whole apartment for seconds or more
 
@@ -28,13 +29,13 @@ def _digest(folder: Path) -> dict[str, str]:
 @pytest.fixture(scope="module")
 def small(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("data") / "one"
-    generate(out, n_households=2, train_days=1, test_days=1, seed=7, workers=1, progress=False)
+    generate(out, n_households=2, train_days=1, test_days=1, seed=7, progress=False)
     return out
 
 
 def test_same_seed_same_bytes_whatever_the_workers(small: Path, tmp_path: Path) -> None:
     again = tmp_path / "two"
-    generate(again, n_households=2, train_days=1, test_days=1, seed=7, workers=2, progress=False)
+    generate(again, n_households=2, train_days=1, test_days=1, seed=7, backend=Backend(workers=2), progress=False)
     assert _digest(small) == _digest(again)
     assert len(_digest(small)) == 5  # meta.json and four days
 
@@ -77,7 +78,7 @@ def test_failed_attempt_is_retried_and_logged(tmp_path: Path, monkeypatch) -> No
 
     monkeypatch.setattr(executor_module.Executor, "run_day", flaky)
     out = tmp_path / "retry"
-    generate(out, n_households=1, train_days=1, test_days=0, seed=3, workers=1, progress=False)
+    generate(out, n_households=1, train_days=1, test_days=0, seed=3, progress=False)
     record = json.loads((out / "generation.log").read_text().splitlines()[0])
     assert record["attempts"] == 2 and "injected" in record["failures"][0]
     assert read_day(out / "household_a" / "train" / "day_000.npz").key == DayKey(3, 0, "train", 0, 1)
@@ -85,12 +86,12 @@ def test_failed_attempt_is_retried_and_logged(tmp_path: Path, monkeypatch) -> No
 
 def test_a_folder_with_another_dataset_is_refused(small: Path) -> None:
     with pytest.raises(HomerError, match="other settings"):
-        generate(small, n_households=2, train_days=1, test_days=1, seed=8, workers=1, progress=False)
+        generate(small, n_households=2, train_days=1, test_days=1, seed=8, progress=False)
 
 
 def test_interrupted_generation_resumes_without_rewriting(small: Path) -> None:
     before = _digest(small)
-    summary = generate(small, n_households=2, train_days=1, test_days=1, seed=7, workers=1, progress=False)
+    summary = generate(small, n_households=2, train_days=1, test_days=1, seed=7, progress=False)
     assert summary["days_written"] == 0 and _digest(small) == before
 
 
@@ -124,6 +125,6 @@ def test_generation_from_homer_habits_and_scripts(tmp_path: Path) -> None:
     out = tmp_path / "homer"
     sources = Sources(habits=str(REFERENCE / "personaBasedSchedules"),
                       scripts=str(REFERENCE / "sourcedScriptsByActivity"))
-    generate(out, n_households=1, train_days=1, test_days=0, seed=0, workers=1, sources=sources, progress=False)
+    generate(out, n_households=1, train_days=1, test_days=0, seed=0, sources=sources, progress=False)
     day = Dataset(out).load("persona0", "train")[0]
     assert day.steps >= 80 and len(day.schedule) > 3

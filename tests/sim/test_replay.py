@@ -129,7 +129,7 @@ def test_replay_lives_the_day_at_its_minutes_and_keeps_switch_state(tmp_path: Pa
     assert record.switches == [(500.0, "tvstand_home_office", "ON"), (516.0, "tvstand_home_office", "OFF")]
     assert replayer.executor.switched_on == set() and record.minutes == list(range(360, 1481, 10))
     result = replay(folder, tmp_path / "out", progress=False)
-    assert result == {"days": 1, "completed": 1, "failed": {}}
+    assert result.pop("execution")["mode"] == "local" and result == {"days": 1, "completed": 1, "failed": {}}
     day = Dataset(tmp_path / "out").load("HouseholdT", "train")[0]
     assert day.moves == ((483.5, "bowl", "cupboard", "table_dining_room", "ON"),) and day.steps == 113
     first = (tmp_path / "out" / "HouseholdT" / "train" / "day_000.npz").read_bytes()
