@@ -185,16 +185,15 @@ def test_a_ray_run_resumes_a_stopped_local_run(ray_cluster, reference: Path, tmp
 
 
 def test_grasp_trials_on_ray_equal_the_local_ones(ray_cluster) -> None:
-    from planners.suites.grasp_suite import MIN_LIFT, run_suite, suite_classes
+    from planners.suites.grasp_suite import run_suite, suite_classes
 
     included, _ = suite_classes()
     classes = {cls: included[cls] for cls in ("mug", "cd")}
     local, ray = (run_suite(trials=1, seed=3, progress=False, classes=classes, backend=backend)
                   for backend in (Backend(), RAY))
     assert [(r["class"], r["trial"]) for r in ray["results"]] == [("mug", 0), ("cd", 0)]
-    assert local["results"] == ray["results"]  # outcome, reason, lift and slip to the last bit
-    assert all(r["success"] or r["reason"] for r in ray["results"])
-    assert any(r["success"] and r["lift_m"] >= MIN_LIFT for r in ray["results"])
+    assert local["results"] == ray["results"]  # success, reason, lift and slip to the last bit
+    assert [r["success"] for r in local["results"]] == [False, True]  # the mug knocks the glass 5.5 cm (collateral)
     assert ray["execution"]["mode"] == "ray" and ray["execution"]["workers"] >= 1
 
 
