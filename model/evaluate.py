@@ -164,11 +164,12 @@ def fit_and_tune(spec: FitSpec, meta: DatasetMeta, window_min: int, target: str 
 
 
 def fit_tuned(spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | None = None,
-              progress: bool = True, target: str = "paper") -> tuple[Predictor, dict]:
-    """Load the cached predictor at `path` or fit one; tune it for `target` unless the cache already was (see
-    `fit_and_tune`), and write the checkpoint when it changed. Every tuning of one fit is kept in the
-    checkpoint's info["tunings"]."""
-    result = run_fit(None, fit_task(spec.method, spec, meta, window_min, path, (target,), progress=progress))
+              progress: bool = True, target: str | Sequence[str] = "paper") -> tuple[Predictor, dict]:
+    """Load the cached predictor at `path` or fit one; tune it for `target` (or each of several in turn; the
+    predictor keeps the last one's params) unless the cache already was (see `fit_and_tune`), and write the
+    checkpoint when it changed. Every tuning of one fit is kept in the checkpoint's info["tunings"]."""
+    targets = (target,) if isinstance(target, str) else tuple(target)
+    result = run_fit(None, fit_task(spec.method, spec, meta, window_min, path, targets, progress=progress))
     result.save()
     return result.predictor, result.info
 

@@ -12,6 +12,8 @@ from homer_sim.errors import unknown_name
 from scenarios.registry import FULL_DAY_HOUSEHOLDS
 from scenarios.task import AssistEnv, AssistTask, DayPlan
 
+TUNINGS = ("paper", "assist")  # tunings of the robot's predictor, in order; it acts on the last (assistance)
+
 
 @dataclass(frozen=True)
 class Setup:
@@ -33,16 +35,32 @@ def dataset_day_plan(dataset, household: str, index: int, split: str = "test", e
     return DayPlan(household, key, tuple(tuple(e) for e in day.schedule), end_min, robot_seed=seed)
 
 
-def predictor_for(dataset, household: str, method: str, window_min: int, checkpoints: Path,
-                  progress: bool = False):
-    """The household's predictor fitted on its training days and tuned on their last tenth at `window_min`, cached
-    under `checkpoints` as `homer evaluate` caches it (fitted on the first call, loaded after)."""
+def predictor_for(dataset, household: str, method: str | None, window_min: int, checkpoints: Path,
+                  progress: bool = False) -> tuple[object, dict]:
+    """The household's predictor fitted on its training days (all but the last tenth, which are its validation
+    days) and tuned on the validation days at `window_min`, cached under `checkpoints` as `homer evaluate` caches
+    it (fitted on the first call, loaded after); and its checkpoint info. method None: the best validated method
+    of the validation table (`model.selection`). Tuned for the paper's objective (reported) and then for the
+    assistance objective, whose threshold the predictor keeps: the robot's (see `thresholds`)."""
     from model.evaluate import FitSpec, fit_tuned, household_split
+    from model.selection import default_method
 
     fit, val, _, _ = household_split(dataset, household, None)
-    spec = FitSpec(method, tuple(fit), tuple(val))
-    predictor, _ = fit_tuned(spec, dataset.meta, window_min, spec.path(Path(checkpoints), household), progress)
-    return predictor
+    spec = FitSpec(method or default_method(), tuple(fit), tuple(val))
+    return fit_tuned(spec, dataset.meta, window_min, spec.path(Path(checkpoints), household), progress,
+                     target=TUNINGS)
+
+
+def method_source(method: str | None) -> str:
+    """How the predictor's method was chosen: named by the caller, or the validation table's best."""
+    from model.selection import TABLE
+
+    return "as asked" if method else f"best on validation days in {TABLE.parent.name}/{TABLE.name}"
+
+
+def thresholds(info: dict, window_min: int) -> dict[str, float]:
+    """{target: the threshold tuned on validation days for it} of a checkpoint's info, for TUNINGS."""
+    return {t: float(info["tunings"][f"{t}@{window_min}"]["params"]["threshold"]) for t in TUNINGS}
 
 
 def _breakfast(skip_breakfast: bool = False, **options) -> Setup:
@@ -76,7 +94,7 @@ def _dataset_day(data: str, household: str, index: int = 0, split: str = "test",
     plan = dataset_day_plan(dataset, household, index, split, end_min, seed)
     env = AssistEnv(AssistTask([plan], window_min=window_min, reference=generator, recording=recording))
     folder = Path(checkpoints) if checkpoints else Path(data) / "checkpoints"
-    return Setup(env, predictor_for(dataset, household, method, window_min, folder) if method else None)
+    return Setup(env, predictor_for(dataset, household, method, window_min, folder)[0] if method else None)
 
 
 ENVIRONMENTS: dict[str, Callable[..., Setup]] = {
