@@ -5,7 +5,7 @@ Experiments (--experiments, default all):
   main      the default methods on all training days of each household; outcome counts for windows 10..120 min
             (every method tuned on its validation days at 30 min)
   ablation  gnn_no_attention and gnn_linear_time, same protocol
-  days      gnn, fremen, fremen_prior, static_semantic and markov on the first 5, 10, 20, 30, 40 training days
+  days      gnn, fremen, fremen_prior, static_semantic, markov and analogs on the first 5, 10, 20, 30, 40 training days
             (50 comes from `main`)
   pretrain  gnn pre-trained on the other four households' training days, fine-tuned on 5..50 days of each
 Files in OUT: main_table.md / main_table.json (30 and 40 min: mean and spread over households), windows.png,
@@ -63,7 +63,7 @@ from scenarios.cli.common import add_backend_arguments, backend_from_args  # noq
 log = logging.getLogger("paper_results")
 EXPERIMENTS = ("main", "ablation", "days", "pretrain")
 ABLATIONS = ("gnn", "gnn_no_attention", "gnn_linear_time")
-DAYS_METHODS = ("gnn", "fremen", "fremen_prior", "static_semantic", "markov")
+DAYS_METHODS = ("gnn", "fremen", "fremen_prior", "static_semantic", "markov", "analogs")
 DAY_COUNTS = (5, 10, 20, 30, 40)
 TABLE_WINDOWS = (HEADLINE_WINDOW_MIN, 40)
 
