@@ -167,15 +167,14 @@ def ensure_dataset(generator, spec: DataSpec) -> tuple[Dataset, float]:
 def ensure_predictor(dataset: Dataset, spec: DataSpec, progress: bool = False):
     """The predictor fitted and tuned on the training days (cached checkpoint, `scenarios.episodes.predictor_for`:
     the best validated method unless spec.method names one, the robot's threshold tuned for the assistance
-    objective); returns it, its checkpoint info and the wall seconds spent fitting (0 when cached)."""
+    objective); returns it, its checkpoint info and the wall seconds spent fitting or tuning (0 when cached)."""
     from scenarios.episodes import predictor_for  # torch and mujoco: imported when a predictor is needed
 
     started = time.perf_counter()
-    folder = dataset.root / "checkpoints"
-    predictor, info = predictor_for(dataset, spec.household, spec.method, spec.window_min, folder, progress)
-    log.info("predictor %s: %s", predictor.method, info)
-    written = any(p.stat().st_mtime >= time.time() - (time.perf_counter() - started) for p in folder.rglob("*.pt"))
-    return predictor, info, time.perf_counter() - started if written else 0.0
+    fitted = predictor_for(dataset, spec.household, spec.method, spec.window_min, dataset.root / "checkpoints",
+                           progress)
+    log.info("predictor %s: %s", fitted.predictor.method, fitted.info)
+    return fitted.predictor, fitted.info, time.perf_counter() - started if fitted.fresh else 0.0
 
 
 def check_meta(meta: DatasetMeta, nodes: tuple[str, ...]) -> None:

@@ -69,8 +69,8 @@ def test_the_robots_predictor_is_the_tables_choice_tuned_for_assistance_on_valid
     table.write_text(json.dumps({"methods": {"analogs": {"h": 10.0}, "markov": {"h": 30.0}, "gnn": {"h": 20.0}}}))
     monkeypatch.setattr(selection, "TABLE", table)
     house = tiny.meta.households[0]
-    predictor, info = predictor_for(tiny, house, None, 30, tmp_path / "checkpoints")
-    assert predictor.method == "markov"
+    predictor, info, fresh = predictor_for(tiny, house, None, 30, tmp_path / "checkpoints")
+    assert predictor.method == "markov" and fresh
     tuned = thresholds(info, 30)
     assert set(info["tunings"]) == {"paper@30", "assist@30"}
     assert predictor.params == info["tunings"]["assist@30"]["params"]  # the robot acts on the assistance tuning
@@ -92,5 +92,5 @@ def test_the_robots_predictor_is_the_tables_choice_tuned_for_assistance_on_valid
     assert info["tunings"]["assist@30"]["val_score"] == assistance(val, chosen)
     assert assistance(val, chosen) >= assistance(val, info["tunings"]["paper@30"]["params"])
 
-    again, _ = predictor_for(tiny, house, "markov", 30, tmp_path / "checkpoints")  # cached, asked by name
-    assert again.params == chosen
+    again, _, fresh = predictor_for(tiny, house, "markov", 30, tmp_path / "checkpoints")  # cached, asked by name
+    assert again.params == chosen and not fresh
