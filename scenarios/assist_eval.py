@@ -2,7 +2,7 @@
 
 Per household, the predictor (by default the best validated method of `model.selection`'s table) is fitted on the
 dataset's training days and tuned on their last tenth, its threshold for the assistance objective (the paper's
-reported beside it), cached as `homer evaluate` caches it (`scenarios.episodes.predictor_for`); method `oracle`
+reported beside it), cached as `homer evaluate` caches it (`scenarios.predictors.predictor_for`); method `oracle`
 instead predicts from the unassisted
 replay of the same day (perfect prediction: what is left is manipulation). Each test day is one episode of the
 assisted-day environment (`scenarios.env`) run by Psi, a task of `homer_sim.execution` (local or Ray); a day's
@@ -31,8 +31,9 @@ from homer_sim.data.generate import Generator, Sources
 from homer_sim.errors import HomerError, unknown_name
 from homer_sim.execution import IN_PROCESS, Backend
 from model.selection import default_method
-from scenarios.episodes import TUNINGS, dataset_day_plan, predictor_for, thresholds
+from scenarios.episodes import dataset_day_plan
 from scenarios.policies import OraclePredictor, PsiPolicy
+from scenarios.predictors import TUNINGS, predictor_for, thresholds
 from scenarios.scoring import day_result
 from scenarios.task import AssistEnv, AssistTask, play
 

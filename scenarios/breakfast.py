@@ -18,8 +18,8 @@ from homer_sim.clock import clock_text
 from homer_sim.person.executor import DayLog
 from scenarios.assist import AssistLog
 from scenarios.breakfast_data import DataSpec, check_meta, ensure_dataset, ensure_predictor, make_generator
-from scenarios.episodes import method_source, thresholds
 from scenarios.policies import PsiPolicy
+from scenarios.predictors import method_source, thresholds
 from scenarios.scoring import day_result
 from scenarios.task import AssistEnv, AssistTask, DayPlan, run_episode
 

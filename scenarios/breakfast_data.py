@@ -165,10 +165,10 @@ def ensure_dataset(generator, spec: DataSpec) -> tuple[Dataset, float]:
 
 
 def ensure_predictor(dataset: Dataset, spec: DataSpec, progress: bool = False):
-    """The predictor fitted and tuned on the training days (cached checkpoint, `scenarios.episodes.predictor_for`:
+    """The predictor fitted and tuned on the training days (cached checkpoint, `scenarios.predictors.predictor_for`:
     the best validated method unless spec.method names one, the robot's threshold tuned for the assistance
     objective); returns it, its checkpoint info and the wall seconds spent fitting or tuning (0 when cached)."""
-    from scenarios.episodes import predictor_for  # torch and mujoco: imported when a predictor is needed
+    from scenarios.predictors import predictor_for  # torch: imported when a predictor is needed
 
     started = time.perf_counter()
     fitted = predictor_for(dataset, spec.household, spec.method, spec.window_min, dataset.root / "checkpoints",

@@ -92,7 +92,7 @@ class PsiPolicy:
     """The paper's robot as a policy: predict, plan with Psi, remember the help it gave (see the module doc).
 
     threshold: the confidence a predicted move needs (default: the predictor's own, which
-    `scenarios.episodes.predictor_for` tunes on validation days for the assistance objective)."""
+    `scenarios.predictors.predictor_for` tunes on validation days for the assistance objective)."""
 
     def __init__(self, scene: SceneInfo, predictor, window_min: int = DEFAULT_WINDOW_MIN,
                  threshold: float | None = None, recording=None) -> None:

@@ -17,7 +17,7 @@ from model.metrics import day_queries, gate, score, window_steps
 from model.predictor import ModelError
 from model.selection import best_method, default_method, format_validation, ranking, validation_table
 from model.synthetic import write_synthetic_dataset
-from scenarios.episodes import predictor_for, thresholds
+from scenarios.predictors import predictor_for, thresholds
 
 
 def _record(val_score: float, version: int = 3) -> dict:
