@@ -1,8 +1,9 @@
 """Navigation of the holonomic base over the floor plan's 2D occupancy grid.
 
 Base poses are chosen in front of a furniture's access side (as the layout validator does, from
-`homer_sim.home.validate`), centred on the target and free of walls, furniture and open doors. Paths are A* on the
-grid inflated by the robot's radius; the base follows them with the arm tucked, through `Controller`.
+`homer_sim.home.validate`), centred on the target and free of walls, furniture, open doors and objects standing on
+the floor (`obstacles`). Paths are A* on the grid inflated by the robot's radius, around the same obstacles; the
+base follows them with the arm tucked, through `Controller`.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import math
 import numpy as np
 
 from homer_sim.errors import HomerError
+from homer_sim.home.catalog import CATALOG
 from homer_sim.home.floorplan import find_path, floor_plan, inflate, path_length
 from homer_sim.home.furniture import local_to_world
 from homer_sim.home.placement import base_height
@@ -28,6 +30,8 @@ WAYPOINT_STRIDE = 4  # keep every 4th grid cell of a path
 CLEARANCE = 0.02  # m beyond the robot's footprint radius
 BASE_DISTANCES = (0.55, 0.65, 0.45, 0.75, 0.85)  # m from the grip site to the base centre, horizontally
 BASE_TURNS = np.radians([0, 15, -15, 30, -30, 45, -45, 60, -60, 75, -75])  # rad off the grasp's approach
+ON_THE_FLOOR = 0.05  # m: an object whose underside is lower than this stands on the floor (the base drives into it)
+FLOOR_MARGIN = 0.03  # m kept beyond such an object's footprint
 
 
 class NavigationError(HomerError):
@@ -49,6 +53,26 @@ class Navigator:
         model = world.model
         self.part_geoms = {name: [g for g in range(model.ngeom) if model.geom_bodyid[g] == model.body(name).id]
                            for name in world.articulations}
+        self.half_sizes = np.array([CATALOG[o.cls].size for o in self.layout.objects]) / 2  # (n_objects, 3), m
+
+    def obstacles(self) -> list[tuple[float, float, float, float]]:
+        """World rectangles (x0, y0, x1, y1) in m the base must keep out of beyond the floor plan: open doors and
+        drawers (`open_part_rects`) and objects standing on the floor (`floor_object_rects`)."""
+        return self.open_part_rects() + self.floor_object_rects()
+
+    def floor_object_rects(self) -> list[tuple[float, float, float, float]]:
+        """World rectangles (x0, y0, x1, y1) in m, FLOOR_MARGIN beyond the footprints of the objects whose underside
+        is lower than ON_THE_FLOOR (a bin, a vacuum cleaner, a basket set down on the floor): the floor plan holds
+        only furniture, and a base driving into them pushes them away."""
+        data = self.world.data
+        rects = []
+        for body, half in zip(self.world.object_body_ids, self.half_sizes, strict=True):
+            extent = np.abs(data.xmat[body].reshape(3, 3)) @ half
+            centre = data.xpos[body]
+            if centre[2] - extent[2] < ON_THE_FLOOR:
+                low, high = centre[:2] - extent[:2] - FLOOR_MARGIN, centre[:2] + extent[:2] + FLOOR_MARGIN
+                rects.append((float(low[0]), float(low[1]), float(high[0]), float(high[1])))
+        return rects
 
     def open_part_rects(self) -> list[tuple[float, float, float, float]]:
         """World rectangles (x0, y0, x1, y1) in m covered by doors and drawers that are not closed."""
@@ -77,7 +101,7 @@ class Navigator:
         rotation = np.column_stack([front_normal, [-front_normal[1], front_normal[0]]])  # furniture frame -> world
         sides = sorted(access_sides(f), key=lambda side: side[1] - float(
             np.dot(rotation.T @ (np.asarray(target_xy) - centre), side[0])))
-        obstacles = self.open_part_rects()
+        obstacles = self.obstacles()
         for local_normal, half_depth, _ in sides:
             normal = rotation @ local_normal
             tangent = np.array([-normal[1], normal[0]])
@@ -96,7 +120,7 @@ class Navigator:
         target = np.asarray(target_xy, dtype=float)
         here = self.controller.q()[:2]
         toward_here = math.atan2(here[1] - target[1], here[0] - target[0])
-        obstacles = self.open_part_rects()
+        obstacles = self.obstacles()
         for turn in NEAR_TURNS:
             for distance in NEAR_DISTANCES:
                 angle = toward_here + float(turn)
@@ -113,12 +137,15 @@ class Navigator:
 
     def path_to(self, goal: tuple[float, float, float], reach: float = 0.0) -> list[tuple[float, float]]:
         """Waypoints (x, y) in m from the base's current position to `goal`, keeping `reach` m (the base, or a
-        carried object held out in front, whichever sticks out further) from open doors and drawers."""
+        carried object held out in front, whichever sticks out further) from open doors and drawers, and the base
+        clear of objects standing on the floor."""
         start = tuple(self.controller.q()[:2])
         extra = np.zeros_like(self.blocked)
         reach = max(reach, self.radius)
-        for rect in self.open_part_rects():
-            grown = (rect[0] - reach, rect[1] - reach, rect[2] + reach, rect[3] + reach)
+        grown_by = [(r, reach) for r in self.open_part_rects()]
+        grown_by += [(r, self.radius + CLEARANCE) for r in self.floor_object_rects()]
+        for rect, grow in grown_by:
+            grown = (rect[0] - grow, rect[1] - grow, rect[2] + grow, rect[3] + grow)
             i0, j0 = self.plan.cell(grown[0], grown[1])
             i1, j1 = self.plan.cell(grown[2], grown[3])
             extra[max(i0, 0) : i1 + 1, max(j0, 0) : j1 + 1] = True
