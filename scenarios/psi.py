@@ -27,7 +27,8 @@ from homer_sim.graph import SceneGraph
 from model.metrics import first_change, gate
 from model.predictor import Rollout
 
-PLACEABLE_CATEGORIES = ("furniture", "appliance")  # what the robot's place skill puts objects on or into
+PLACEABLE_CATEGORIES = ("furniture", "appliance", "room")  # what the robot's place skill puts objects on or into
+# (a room: on a free spot of its floor)
 
 
 @dataclass(frozen=True)
@@ -200,7 +201,7 @@ def plan_relocations(graph: SceneGraph, movable: np.ndarray, relocations: Sequen
 
 
 def unplaceable(graph: SceneGraph, destination: str) -> str | None:
-    """Why the robot cannot place on `destination` (None if it can: furniture and appliances)."""
+    """Why the robot cannot place on `destination` (None if it can: furniture, appliances and rooms' floors)."""
     category = graph.categories[graph.index(destination)]
     if category in PLACEABLE_CATEGORIES:
         return None

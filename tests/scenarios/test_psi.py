@@ -115,6 +115,13 @@ def test_carried_excluded_and_unplaceable_moves_are_skipped_with_reasons() -> No
     assert all(s.obj == "milk" for s in plan.steps if s.action in ("pick", "place"))
 
 
+def test_a_room_is_a_destination_its_floor() -> None:
+    graph = _graph()
+    plan = _plan(graph, _rollout(graph, {"milk": [("kitchen", 0.9)] * 3}))
+    assert [(r.obj, r.destination) for r in plan.relocations] == [("milk", "kitchen")] and plan.skipped == ()
+    assert PlanStep("place", "kitchen", "kitchen", "milk") in plan.steps
+
+
 def test_held_objects_stay_until_the_person_moves_them_or_the_window_passes() -> None:
     holds = Holds()
     on_table = _graph(bowl="table")
