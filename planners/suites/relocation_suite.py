@@ -4,8 +4,10 @@ The triples are the person's moves in the training days of a dataset made by `ho
 stores them and its `DayKey`). Each triple is tried once, from the apartment's state at its first occurrence:
 the day is lived again exactly (`Generator.replay`, in a world that also holds the robot at its parking pose)
 up to the last snapshot before the move at which the object rests on its source and is not in the person's
-hand. From there only the robot acts, with its real skills: it opens what closes over the source and the
-destination, picks the object, carries it, places it, and closes what it opened.
+hand, or, where no snapshot has it so (put there and taken away again within one grid step, or in the hand at
+each), up to the person's last action before the move after which it does. From there only the robot acts,
+with its real skills: it opens what closes over the source and the destination, picks the object, carries it,
+places it, and closes what it opened.
 
 Success: the scene-graph observer puts the object ON or INSIDE the destination, it stands as it should (an
 object that is not cloth or a ball stands up, `Arm.fallen_over`), and no other object (but what rides on the
@@ -121,6 +123,10 @@ def quick_subset(tried: list[Occurrence], classes: dict[str, str]) -> list[Occur
 
 
 # --- one trial ------------------------------------------------------------------------------------------
+class _Stop(Exception):
+    """Raised after the person's last action before a move, to stop living the day there."""
+
+
 class Bench:
     """The suite's worlds: a generator for the person's days and the robot's world they are lived again in."""
 
@@ -146,24 +152,61 @@ class Bench:
 
     def live_until(self, occurrence: Occurrence) -> str | None:
         """Live the occurrence's day up to the last snapshot before the move at which the object rests on its
-        source outside the person's hand (the latest REPLAYS snapshots the recorded day has it there are tried);
-        None when found, else why not."""
+        source outside the person's hand (the latest REPLAYS snapshots the recorded day has it there are tried),
+        else up to the person's last action before the move after which it does (`_before_the_move`); None when
+        found, else why not."""
         day = self.day(occurrence)
         last = int(occurrence.minute // GRID_MIN) * GRID_MIN
         nodes = self.dataset.meta.nodes
         obj, source = nodes.index(occurrence.obj), nodes.index(occurrence.source)
-        found = f"{occurrence.obj} rested on {occurrence.source} at no snapshot of the day before the move"
         recorded = [int(m) for m, parent in zip(day.minutes, day.parent[:, obj], strict=True)
                     if m <= last and parent == source]  # where the recorded day has it on its source
         for minute in recorded[::-1][:REPLAYS]:
             self.generator.replay(occurrence.household, day.replay_key(), day.schedule, executor=self.executor,
                                   end_min=minute)
-            graph = self.executor.observer.update()
-            if graph.parent_of(occurrence.obj) == occurrence.source and occurrence.obj not in set(
-                    self.executor.avatar.carried()):
+            if self._on_source(occurrence):
                 return None
-            found = f"at {minute} min {occurrence.obj} was on {graph.parent_of(occurrence.obj)} or in the hand"
-        return found
+        return self._before_the_move(occurrence, day)
+
+    def _before_the_move(self, occurrence: Occurrence, day: Day) -> str | None:
+        """Live the occurrence's day again up to the person's last action within GRID_MIN minutes before the move
+        after which the object rests on its source outside the person's hand (found by living it once, then lived
+        again up to there); None when there is one, else why not."""
+        last_free: list[int] = []
+
+        def watch(index: int, events: list) -> None:
+            if occurrence.minute - GRID_MIN <= events[index][0] < occurrence.minute and self._on_source(occurrence):
+                last_free.append(index)
+            if index + 1 >= len(events) or events[index + 1][0] >= occurrence.minute:
+                raise _Stop
+
+        self._live(occurrence, day, watch)
+        if not last_free:
+            return (f"{occurrence.obj} rested on {occurrence.source} outside the person's hand at no snapshot and "
+                    f"after no action in the {GRID_MIN} min before the move")
+        self._live(occurrence, day, lambda index, events: _stop_after(index, last_free[-1]))
+        return None
+
+    def _live(self, occurrence: Occurrence, day: Day, after_action) -> None:
+        """Live the occurrence's day from its start until `after_action(index, events)`, called after each of the
+        person's actions, raises _Stop."""
+        scripts = self.generator.scripts_for(occurrence.household)
+        events, last = self.executor.begin_day(list(day.schedule), scripts, day.replay_key().streams()[1])
+        try:
+            self.executor.live(events, last, after_action=lambda index: after_action(index, events))
+        except _Stop:
+            pass
+
+    def _on_source(self, occurrence: Occurrence) -> bool:
+        """Whether the occurrence's object rests on its source now, outside the person's hand."""
+        graph = self.executor.observer.update()
+        return graph.parent_of(occurrence.obj) == occurrence.source and occurrence.obj not in set(
+            self.executor.avatar.carried())
+
+
+def _stop_after(index: int, last: int) -> None:
+    if index >= last:
+        raise _Stop
 
 
 def _anchor(graph, world, node: str) -> str:
