@@ -7,7 +7,8 @@ up to the last snapshot before the move at which the object rests on its source 
 hand, or, where no snapshot has it so (put there and taken away again within one grid step, or in the hand at
 each), up to the person's last action before the move after which it does. From there only the robot acts,
 with its real skills: it opens what closes over the source and the destination, picks the object, carries it,
-places it, and closes what it opened.
+places it, and closes what it opened (between two pieces of furniture that close, one at a time: the object is
+set down on an open top between them, `relocate`).
 
 Success: the scene-graph observer puts the object ON or INSIDE the destination, it stands as it should (an
 object that is not cloth or a ball stands up, `Arm.fallen_over`), and no other object (but what rides on the
@@ -219,22 +220,73 @@ def _anchor(graph, world, node: str) -> str:
 
 def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, destination: str) -> str | None:
     """Open what closes over `source` and `destination`, pick `obj`, place it, close what was opened; None when
-    every skill succeeded, else the first failure's reason prefixed with its skill."""
+    every skill succeeded, else the first failure's reason prefixed with its skill. Where both close (two pieces
+    of furniture with doors or drawers), one is open at a time: two open doors can leave no way between them (a
+    cupboard's and the dishwasher's across the kitchen), and a full hand opens and closes nothing; so the object
+    is set down on the nearest open top (`set_down`) while the source closes and the destination opens."""
     graph = robot.observer.update()
     anchor = _anchor(graph, robot.world, source)
-    parts = [p for node in dict.fromkeys((anchor, destination)) for p in containers.get(node, [])]
+    at = anchor if anchor in robot.navigator.furniture else None
+    first = containers.get(anchor, [])
+    second = [p for p in containers.get(destination, []) if p not in first]
+    both = bool(first and second)
+    failure = _open(robot, first if both else first + second)
+    if failure is not None:
+        return failure
+    result = robot.pick(obj, at, into=destination)
+    if not result.success:
+        return f"pick: {result.reason}"
+    if both:
+        top, failure = set_down(robot, containers)
+        failure = failure or _close(robot, first) or _open(robot, second)
+        if failure is not None:
+            return failure
+        result = robot.pick(obj, top, into=destination)
+        if not result.success:
+            return f"pick: {result.reason}"
+    result = robot.place(destination)
+    if not result.success:
+        return f"place: {result.reason.removeprefix('place: ')}"
+    return _close(robot, second if both else first + second)
+
+
+def set_down(robot, containers: dict[str, list[str]], tries: int = 3) -> tuple[str, str | None]:
+    """Put the held object down on the open top (furniture with no door or drawer) nearest the robot, trying the
+    `tries` nearest, standing up on it or on what lies there; (the top, None), or (the last one tried, the
+    failure prefixed `set-down:`)."""
+    from homer_sim.graph import ON
+
+    obj = robot.held
+    x, y = robot.controller.q()[:2]
+    tops = sorted((float(np.hypot(f.pos[0] - x, f.pos[1] - y)), f.name) for f in robot.world.layout.furniture
+                  if f.name not in containers and f.name in robot.navigator.furniture
+                  and robot.spots.places_of(f.name, ON))
+    failure = "set-down: no open top"
+    for _, top in tops[:tries]:
+        result = robot.place(top, ON)
+        resting = robot.held is None and _anchor(robot.observer.update(), robot.world, obj) == top
+        if result.success or (resting and not robot.arm.fallen_over(obj)):  # on the top, or on what lies there
+            return top, None
+        failure = f"set-down: {result.reason.removeprefix('place: ')}"
+        if robot.held is None:
+            return top, failure
+    return (tops[0][1] if tops else ""), failure
+
+
+def _open(robot, parts: list[str]) -> str | None:
     for part in parts:
         result = robot.open_articulation(part)
         if not result.success:
             return f"open {part}: {result.reason}"
-    result = robot.pick(obj, anchor if anchor in robot.navigator.furniture else None, into=destination)
-    if not result.success:
-        return f"pick: {result.reason}"
-    result = robot.place(destination)
-    if not result.success:
-        return f"place: {result.reason.removeprefix('place: ')}"
+    return None
+
+
+def _close(robot, parts: list[str]) -> str | None:
+    """Close `parts` in reverse order, each tried twice (as the assisted day's robot does); None, or the failure."""
     for part in parts[::-1]:
         result = robot.close_articulation(part)
+        if not result.success:
+            result = robot.close_articulation(part)
         if not result.success:
             return f"close {part}: {result.reason}"
     return None
