@@ -126,12 +126,13 @@ class Helper:
     # --- acting ---------------------------------------------------------------------------------------------
     def _carry_out(self, steps: Sequence[PlanStep], relocations: Sequence[Relocation], minute: int,
                    started: float) -> None:
-        """Run the steps; a failed open skips what needs that container, a failed pick skips its place."""
+        """Run the steps; a failed open skips what needs that container, a failed pick or set-down skips the rest
+        of its relocation."""
         failed_containers: dict[str, str] = {}
         picked: dict[str, SkillResult] = {}
         by_obj = {r.obj: r for r in relocations}
         for step in steps:
-            if self.robot.held is not None and step.action != "place":
+            if self.robot.held is not None and step.action not in ("place", "set_down"):
                 self.event(f"robot stops the plan: it still holds {self.robot.held}", minute, "ERROR")
                 break
             now = minute + (float(self.world.data.time) - started) / 60.0
@@ -146,7 +147,7 @@ class Helper:
                         "INFO" if result.success else "WARN")
             if step.action == "open" and not result.success:
                 failed_containers[step.node] = result.reason
-            elif step.action == "pick":
+            elif step.action in ("pick", "set_down"):
                 picked[step.obj] = result
                 if not result.success:
                     self._finish(by_obj[step.obj], minute, False, result.reason)
@@ -167,6 +168,20 @@ class Helper:
                             "WARN")
                 result = self.robot.close_articulation(step.target)
             return result
+        if step.action == "pick" and step.node == "":  # again, where the robot set it down
+            if not picked.get(step.obj, SkillResult(False)).success:
+                return None
+            destination = by_obj[step.obj].destination
+            if destination in failed_containers:
+                reason = f"{destination} did not open ({failed_containers[destination]})"
+                picked[step.obj] = SkillResult(False, reason)
+                self._finish(by_obj[step.obj], minute, False, reason)
+                return None
+            graph = self.robot.observer.update()
+            node = graph.parent_of(step.obj)
+            while node in self.world.object_names:  # on what lies on the top
+                node = graph.parent_of(node)
+            return self.robot.pick(step.obj, node, into=by_obj[step.obj].destination)
         if step.action == "pick":
             blocked = [c for c in (step.node, by_obj[step.obj].destination) if c in failed_containers]
             if blocked:
@@ -177,6 +192,11 @@ class Helper:
             return self.robot.pick(step.obj, step.node, into=by_obj[step.obj].destination)
         if not picked.get(step.obj, SkillResult(False)).success:
             return None
+        if step.action == "set_down":
+            result = self.robot.set_down(self.containers)
+            if not result.success and self.robot.held == step.obj:
+                self._put_down(step.obj, by_obj[step.obj].source)
+            return result
         result = self.robot.place(step.target)
         if not result.success and self.robot.held == step.obj:  # do not keep it in the hand: put it down
             self._put_down(step.obj, by_obj[step.obj].source)
@@ -195,12 +215,13 @@ class Helper:
         log.warning("robot still holds %s" if self.robot.held == obj else "%s left the hand on the way", obj)
 
     def _finish(self, relocation: Relocation, minute: int, done: bool, reason: str) -> None:
-        """Record `relocation`'s outcome; one that only the person stood in the way of (the object not in the
-        robot's hand) waits for the next snapshot instead."""
-        if not done and IN_THE_WAY in reason and self.robot.held != relocation.obj:
+        """Record `relocation`'s outcome; one that only the person stood in the way of (the object still on its
+        source) waits for the next snapshot instead."""
+        graph = self.robot.observer.update()
+        if (not done and IN_THE_WAY in reason and self.robot.held != relocation.obj
+                and graph.parent_of(relocation.obj) == relocation.source):
             self.waiting.append(relocation)
             return
-        graph = self.robot.observer.update()
         ended = graph.parent_of(relocation.obj) or ""
         self.log.relocations.append(RelocationOutcome(minute, relocation, done, reason, ended))
 

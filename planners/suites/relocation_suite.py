@@ -223,7 +223,7 @@ def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, des
     every skill succeeded, else the first failure's reason prefixed with its skill. Where both close (two pieces
     of furniture with doors or drawers), one is open at a time: two open doors can leave no way between them (a
     cupboard's and the dishwasher's across the kitchen), and a full hand opens and closes nothing; so the object
-    is set down on the nearest open top (`set_down`) while the source closes and the destination opens."""
+    is set down on the nearest open top (`Robot.set_down`) while the source closes and the destination opens."""
     graph = robot.observer.update()
     anchor = _anchor(graph, robot.world, source)
     at = anchor if anchor in robot.navigator.furniture else None
@@ -237,40 +237,18 @@ def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, des
     if not result.success:
         return f"pick: {result.reason}"
     if both:
-        top, failure = set_down(robot, containers)
+        result = robot.set_down(containers)
+        failure = None if result.success else f"set-down: {result.reason}"
         failure = failure or _close(robot, first) or _open(robot, second)
         if failure is not None:
             return failure
-        result = robot.pick(obj, top, into=destination)
+        result = robot.pick(obj, _anchor(robot.observer.update(), robot.world, obj), into=destination)
         if not result.success:
             return f"pick: {result.reason}"
     result = robot.place(destination)
     if not result.success:
         return f"place: {result.reason.removeprefix('place: ')}"
     return _close(robot, second if both else first + second)
-
-
-def set_down(robot, containers: dict[str, list[str]], tries: int = 3) -> tuple[str, str | None]:
-    """Put the held object down on the open top (furniture with no door or drawer) nearest the robot, trying the
-    `tries` nearest, standing up on it or on what lies there; (the top, None), or (the last one tried, the
-    failure prefixed `set-down:`)."""
-    from homer_sim.graph import ON
-
-    obj = robot.held
-    x, y = robot.controller.q()[:2]
-    tops = sorted((float(np.hypot(f.pos[0] - x, f.pos[1] - y)), f.name) for f in robot.world.layout.furniture
-                  if f.name not in containers and f.name in robot.navigator.furniture
-                  and robot.spots.places_of(f.name, ON))
-    failure = "set-down: no open top"
-    for _, top in tops[:tries]:
-        result = robot.place(top, ON)
-        resting = robot.held is None and _anchor(robot.observer.update(), robot.world, obj) == top
-        if result.success or (resting and not robot.arm.fallen_over(obj)):  # on the top, or on what lies there
-            return top, None
-        failure = f"set-down: {result.reason.removeprefix('place: ')}"
-        if robot.held is None:
-            return top, failure
-    return (tops[0][1] if tops else ""), failure
 
 
 def _open(robot, parts: list[str]) -> str | None:
