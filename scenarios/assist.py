@@ -3,7 +3,9 @@
 `Helper.act` orders the relocations into skill calls (`scenarios.psi.plan_steps`: a container is opened before
 it is used and closed after), runs them with the robot's skills and drives the robot back to its parking pose,
 out of the person's way. The physics seconds it spends pass on the routine clock: the person's next actions wait
-until the robot is done (they take turns). Every relocation ends done (the object observed on its destination)
+until the robot is done (they take turns). The robot does not drive into the person (`Navigator.others`); a
+relocation that only the person stood in the way of, the robot not holding its object, waits and is tried again at
+the next snapshot the robot acts at. Every other relocation ends done (the object observed on its destination)
 or not, with the skill's reason; objects the robot displaced more than COLLATERAL_M that no relocation named are
 kept as collateral.
 """
@@ -20,7 +22,7 @@ from homer_sim.graph import ON, SceneGraph
 from homer_sim.person.executor import DayLog, Executor
 from homer_sim.world import World
 from planners.motion.control import FREE_MOTION
-from planners.motion.navigation import NavigationError
+from planners.motion.navigation import IN_THE_WAY, NavigationError
 from planners.robot import DEFAULT_POSE
 from planners.skills import Robot, SkillResult
 from scenarios.psi import PlanStep, Relocation, plan_steps
@@ -30,6 +32,7 @@ log = logging.getLogger(__name__)
 FALLBACK_PLACES = 3  # places tried to put an object down after a failed place
 COLLATERAL_M = 0.02  # an object the robot moved farther than this (m) without being asked is collateral
 ROBOT_CLEARANCE_M = 0.55  # the person does not walk within this distance (m) of the robot's base centre
+PERSON_RADIUS_M = 0.25  # m around the person's position the robot's base keeps out of
 
 
 @dataclass(frozen=True)
@@ -86,12 +89,19 @@ class Helper:
         self.robot = Robot(world, rng)
         self.containers = containers_of(world)
         self.log = AssistLog()
+        self.waiting: list[Relocation] = []  # relocations the person stood in the way of, for the next snapshot
         executor.dynamic_obstacles = self.robot_cells
+        self.robot.navigator.others = self.person_rects
 
     def act(self, relocations: Sequence[Relocation], graph: SceneGraph, movable: np.ndarray, minute: int) -> float:
         """Carry out `relocations` (in this order) at grid minute `minute`, where `graph` was observed (movable:
-        Shape (N,) bool over its nodes), then park; returns the routine minute the robot is done (`minute` when
-        there is nothing to do)."""
+        Shape (N,) bool over its nodes), after those that waited for the person to get out of the way (still on
+        their source and not asked for again), then park; returns the routine minute the robot is done (`minute`
+        when there is nothing to do)."""
+        asked = {r.obj for r in relocations}
+        relocations = [*(r for r in self.waiting if r.obj not in asked and graph.parent_of(r.obj) == r.source),
+                       *relocations]
+        self.waiting = []
         if not relocations:
             return float(minute)
         steps = plan_steps(graph, movable, relocations, self.containers, self.open_containers())
@@ -116,12 +126,13 @@ class Helper:
     # --- acting ---------------------------------------------------------------------------------------------
     def _carry_out(self, steps: Sequence[PlanStep], relocations: Sequence[Relocation], minute: int,
                    started: float) -> None:
-        """Run the steps; a failed open skips what needs that container, a failed pick skips its place."""
+        """Run the steps; a failed open skips what needs that container, a failed pick or set-down skips the rest
+        of its relocation."""
         failed_containers: dict[str, str] = {}
         picked: dict[str, SkillResult] = {}
         by_obj = {r.obj: r for r in relocations}
         for step in steps:
-            if self.robot.held is not None and step.action != "place":
+            if self.robot.held is not None and step.action not in ("place", "set_down"):
                 self.event(f"robot stops the plan: it still holds {self.robot.held}", minute, "ERROR")
                 break
             now = minute + (float(self.world.data.time) - started) / 60.0
@@ -136,7 +147,7 @@ class Helper:
                         "INFO" if result.success else "WARN")
             if step.action == "open" and not result.success:
                 failed_containers[step.node] = result.reason
-            elif step.action == "pick":
+            elif step.action in ("pick", "set_down"):
                 picked[step.obj] = result
                 if not result.success:
                     self._finish(by_obj[step.obj], minute, False, result.reason)
@@ -157,6 +168,20 @@ class Helper:
                             "WARN")
                 result = self.robot.close_articulation(step.target)
             return result
+        if step.action == "pick" and step.node == "":  # again, where the robot set it down
+            if not picked.get(step.obj, SkillResult(False)).success:
+                return None
+            destination = by_obj[step.obj].destination
+            if destination in failed_containers:
+                reason = f"{destination} did not open ({failed_containers[destination]})"
+                picked[step.obj] = SkillResult(False, reason)
+                self._finish(by_obj[step.obj], minute, False, reason)
+                return None
+            graph = self.robot.observer.update()
+            node = graph.parent_of(step.obj)
+            while node in self.world.object_names:  # on what lies on the top
+                node = graph.parent_of(node)
+            return self.robot.pick(step.obj, node, into=by_obj[step.obj].destination)
         if step.action == "pick":
             blocked = [c for c in (step.node, by_obj[step.obj].destination) if c in failed_containers]
             if blocked:
@@ -167,6 +192,11 @@ class Helper:
             return self.robot.pick(step.obj, step.node, into=by_obj[step.obj].destination)
         if not picked.get(step.obj, SkillResult(False)).success:
             return None
+        if step.action == "set_down":
+            result = self.robot.set_down(self.containers)
+            if not result.success and self.robot.held == step.obj:
+                self._put_down(step.obj, by_obj[step.obj].source)
+            return result
         result = self.robot.place(step.target)
         if not result.success and self.robot.held == step.obj:  # do not keep it in the hand: put it down
             self._put_down(step.obj, by_obj[step.obj].source)
@@ -185,7 +215,13 @@ class Helper:
         log.warning("robot still holds %s" if self.robot.held == obj else "%s left the hand on the way", obj)
 
     def _finish(self, relocation: Relocation, minute: int, done: bool, reason: str) -> None:
+        """Record `relocation`'s outcome; one that only the person stood in the way of (the object still on its
+        source) waits for the next snapshot instead."""
         graph = self.robot.observer.update()
+        if (not done and IN_THE_WAY in reason and self.robot.held != relocation.obj
+                and graph.parent_of(relocation.obj) == relocation.source):
+            self.waiting.append(relocation)
+            return
         ended = graph.parent_of(relocation.obj) or ""
         self.log.relocations.append(RelocationOutcome(minute, relocation, done, reason, ended))
 
@@ -205,6 +241,11 @@ class Helper:
             if name not in asked:
                 self.log.collateral.append((minute, name, round(float(moved[i]), 3)))
                 self.event(f"robot displaced {name} by {moved[i] * 100:.0f} cm", minute, "WARN")
+
+    def person_rects(self) -> list[tuple[float, float, float, float]]:
+        """The square (x0, y0, x1, y1, m) PERSON_RADIUS_M around the person, for the robot's navigation."""
+        x, y = self.executor.avatar.x, self.executor.avatar.y
+        return [(x - PERSON_RADIUS_M, y - PERSON_RADIUS_M, x + PERSON_RADIUS_M, y + PERSON_RADIUS_M)]
 
     def robot_cells(self) -> np.ndarray:
         """Grid cells the person must not walk through: a disk around the robot's base."""

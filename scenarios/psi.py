@@ -27,7 +27,8 @@ from homer_sim.graph import SceneGraph
 from model.metrics import first_change, gate
 from model.predictor import Rollout
 
-PLACEABLE_CATEGORIES = ("furniture", "appliance")  # what the robot's place skill puts objects on or into
+PLACEABLE_CATEGORIES = ("furniture", "appliance", "room")  # what the robot's place skill puts objects on or into
+# (a room: on a free spot of its floor)
 
 
 @dataclass(frozen=True)
@@ -47,7 +48,8 @@ class Relocation:
 @dataclass(frozen=True)
 class PlanStep:
     """One robot skill call: `action` is open/close (target: articulation `<furniture>/<part>`), pick (target: the
-    object, `node`: the furniture to stand at) or place (target: the destination node, `node` the same)."""
+    object, `node`: the furniture to stand at, "" for where the robot set it down), place (target: the destination
+    node, `node` the same) or set_down (target: the held object, put down for a while on an open top near by)."""
 
     action: str
     target: str
@@ -200,7 +202,7 @@ def plan_relocations(graph: SceneGraph, movable: np.ndarray, relocations: Sequen
 
 
 def unplaceable(graph: SceneGraph, destination: str) -> str | None:
-    """Why the robot cannot place on `destination` (None if it can: furniture and appliances)."""
+    """Why the robot cannot place on `destination` (None if it can: furniture, appliances and rooms' floors)."""
     category = graph.categories[graph.index(destination)]
     if category in PLACEABLE_CATEGORIES:
         return None
@@ -214,7 +216,10 @@ def plan_steps(graph: SceneGraph, movable: np.ndarray, relocations: Sequence[Rel
 
     containers: furniture name -> its articulations (`<furniture>/<part>`); every part of a container is opened
     before the first relocation that takes from or puts into it and closed after the last one (only containers
-    the plan opened: those in `already_open` stay as the person left them).
+    the plan opened: those in `already_open` stay as the person left them). A relocation from one container into
+    another that is still closed has one open at a time: picked, set down, the containers the plan opened closed,
+    the destination opened, picked again and placed (two open doors can leave no way between them, and a full
+    hand opens nothing).
     """
     movable = np.asarray(movable, dtype=bool)
 
@@ -225,12 +230,22 @@ def plan_steps(graph: SceneGraph, movable: np.ndarray, relocations: Sequence[Rel
     steps: list[PlanStep] = []
     opened: list[str] = []
     for k, r in enumerate(relocations):
-        for container in used_containers(r):
+        shut = r.destination not in opened and r.destination not in already_open
+        one_at_a_time = len(used_containers(r)) == 2 and shut
+        for container in used_containers(r)[:1] if one_at_a_time else used_containers(r):
             if container not in opened and container not in already_open:
                 steps += [PlanStep("open", part, container) for part in containers[container]]
                 opened.append(container)
         source_anchor = anchor_of(graph, movable, r.source)
-        steps += [PlanStep("pick", r.obj, source_anchor, r.obj), PlanStep("place", r.destination, r.destination, r.obj)]
+        steps.append(PlanStep("pick", r.obj, source_anchor, r.obj))
+        if one_at_a_time:
+            steps.append(PlanStep("set_down", r.obj, "", r.obj))
+            for container in opened[::-1]:
+                steps += [PlanStep("close", part, container) for part in containers[container]][::-1]
+            opened = [r.destination]
+            steps += [PlanStep("open", part, r.destination) for part in containers[r.destination]]
+            steps.append(PlanStep("pick", r.obj, "", r.obj))
+        steps.append(PlanStep("place", r.destination, r.destination, r.obj))
         later = {c for rest in relocations[k + 1 :] for c in used_containers(rest)}
         for container in [c for c in opened if c not in later][::-1]:
             steps += [PlanStep("close", part, container) for part in containers[container]][::-1]

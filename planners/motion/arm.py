@@ -181,7 +181,7 @@ class Arm:
         from the tuck (see `way_in`)."""
         quat = grasp.quat()
         above = grasp.position - grasp.approach * grasp.rotation[:, 0]
-        obstacles = self.navigator.open_part_rects()
+        obstacles = self.navigator.obstacles()
         here = [tuple(self.controller.target[:3])] if here_first else []
         candidates = self._grasp_bases(grasp, pull)
         lifts = (SIDE_LIFT, LOW_SIDE_LIFT) if np.linalg.norm(pull) > 0.0 else (SIDE_LIFT,)  # a shelf grasp's first leg

@@ -1,17 +1,20 @@
 """Navigation of the holonomic base over the floor plan's 2D occupancy grid.
 
 Base poses are chosen in front of a furniture's access side (as the layout validator does, from
-`homer_sim.home.validate`), centred on the target and free of walls, furniture and open doors. Paths are A* on the
-grid inflated by the robot's radius; the base follows them with the arm tucked, through `Controller`.
+`homer_sim.home.validate`), centred on the target and free of walls, furniture, open doors and objects standing on
+the floor (`obstacles`). Paths are A* on the grid inflated by the robot's radius, around the same obstacles; the
+base follows them with the arm tucked, through `Controller`.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
 from homer_sim.errors import HomerError
+from homer_sim.home.catalog import CATALOG
 from homer_sim.home.floorplan import find_path, floor_plan, inflate, path_length
 from homer_sim.home.furniture import local_to_world
 from homer_sim.home.placement import base_height
@@ -28,14 +31,21 @@ WAYPOINT_STRIDE = 4  # keep every 4th grid cell of a path
 CLEARANCE = 0.02  # m beyond the robot's footprint radius
 BASE_DISTANCES = (0.55, 0.65, 0.45, 0.75, 0.85)  # m from the grip site to the base centre, horizontally
 BASE_TURNS = np.radians([0, 15, -15, 30, -30, 45, -45, 60, -60, 75, -75])  # rad off the grasp's approach
+ON_THE_FLOOR = 0.05  # m: an object whose underside is lower than this stands on the floor (the base drives into it)
+FLOOR_MARGIN = 0.03  # m kept beyond such an object's footprint
+IN_THE_WAY = "someone is in the way"  # ends a navigation failure that only `Navigator.others` caused
 
 
 class NavigationError(HomerError):
-    """No free base pose or no path."""
+    """No free base pose or no path (its message ends with IN_THE_WAY where only `Navigator.others` blocked it)."""
 
 
 class Navigator:
-    """Base poses and base motion in one World for a base of `robot`'s footprint; `controller` drives the robot."""
+    """Base poses and base motion in one World for a base of `robot`'s footprint; `controller` drives the robot.
+
+    `others`: a function giving the world rectangles (x0, y0, x1, y1, m) of what moves by itself and must not be
+    driven into (a person); whoever runs the robot among them sets it. Nothing by default.
+    """
 
     def __init__(self, world, controller: Controller, robot: RobotSpec = ROBOT) -> None:
         self.world = world
@@ -49,6 +59,41 @@ class Navigator:
         model = world.model
         self.part_geoms = {name: [g for g in range(model.ngeom) if model.geom_bodyid[g] == model.body(name).id]
                            for name in world.articulations}
+        self.half_sizes = np.array([CATALOG[o.cls].size for o in self.layout.objects]) / 2  # (n_objects, 3), m
+        self.others: Callable[[], list[tuple[float, float, float, float]]] = list
+
+    def obstacles(self) -> list[tuple[float, float, float, float]]:
+        """World rectangles (x0, y0, x1, y1) in m the base must keep out of beyond the floor plan: open doors and
+        drawers (`open_part_rects`), objects standing on the floor (`floor_object_rects`) and `others`."""
+        return self.open_part_rects() + self.floor_object_rects() + self.others()
+
+    def _free(self, xy: np.ndarray, radius: float, still: list, others: list, blocked: list[bool]) -> bool:
+        """Whether the base disk of `radius` m at xy (m) is clear of the floor plan, `still` and `others` (world
+        rectangles); where only `others` block it, blocked[0] becomes True."""
+        if not self.plan.disk_is_free(float(xy[0]), float(xy[1]), radius, still):
+            return False
+        if others and not self.plan.disk_is_free(float(xy[0]), float(xy[1]), radius, others):
+            blocked[0] = True
+            return False
+        return True
+
+    @staticmethod
+    def _failure(message: str, blocked: bool) -> NavigationError:
+        return NavigationError(f"{message}: {IN_THE_WAY}" if blocked else message)
+
+    def floor_object_rects(self) -> list[tuple[float, float, float, float]]:
+        """World rectangles (x0, y0, x1, y1) in m, FLOOR_MARGIN beyond the footprints of the objects whose underside
+        is lower than ON_THE_FLOOR (a bin, a vacuum cleaner, a basket set down on the floor): the floor plan holds
+        only furniture, and a base driving into them pushes them away."""
+        data = self.world.data
+        rects = []
+        for body, half in zip(self.world.object_body_ids, self.half_sizes, strict=True):
+            extent = np.abs(data.xmat[body].reshape(3, 3)) @ half
+            centre = data.xpos[body]
+            if centre[2] - extent[2] < ON_THE_FLOOR:
+                low, high = centre[:2] - extent[:2] - FLOOR_MARGIN, centre[:2] + extent[:2] + FLOOR_MARGIN
+                rects.append((float(low[0]), float(low[1]), float(high[0]), float(high[1])))
+        return rects
 
     def open_part_rects(self) -> list[tuple[float, float, float, float]]:
         """World rectangles (x0, y0, x1, y1) in m covered by doors and drawers that are not closed."""
@@ -77,7 +122,7 @@ class Navigator:
         rotation = np.column_stack([front_normal, [-front_normal[1], front_normal[0]]])  # furniture frame -> world
         sides = sorted(access_sides(f), key=lambda side: side[1] - float(
             np.dot(rotation.T @ (np.asarray(target_xy) - centre), side[0])))
-        obstacles = self.open_part_rects()
+        still, others, blocked = self.open_part_rects() + self.floor_object_rects(), self.others(), [False]
         for local_normal, half_depth, _ in sides:
             normal = rotation @ local_normal
             tangent = np.array([-normal[1], normal[0]])
@@ -86,9 +131,9 @@ class Navigator:
             for offset in STAND_OFFSETS:
                 for distance in STAND_DISTANCES[STAND_DISTANCES >= min(reach, STAND_DISTANCES[-1])]:
                     xy = front + tangent * (along + offset) + normal * distance
-                    if self.plan.disk_is_free(float(xy[0]), float(xy[1]), self.radius, obstacles):
+                    if self._free(xy, self.radius, still, others, blocked):
                         return float(xy[0]), float(xy[1]), math.atan2(-normal[1], -normal[0])
-        raise NavigationError(f"no free base pose in front of {node} near {np.round(target_xy, 2).tolist()}")
+        raise self._failure(f"no free base pose in front of {node} near {np.round(target_xy, 2).tolist()}", blocked[0])
 
     def stand_near(self, target_xy: tuple[float, float]) -> tuple[float, float, float]:
         """A free base pose (x m, y m, yaw rad) facing `target_xy` (m, world) from NEAR_DISTANCES away, for an
@@ -96,14 +141,14 @@ class Navigator:
         target = np.asarray(target_xy, dtype=float)
         here = self.controller.q()[:2]
         toward_here = math.atan2(here[1] - target[1], here[0] - target[0])
-        obstacles = self.open_part_rects()
+        still, others, blocked = self.open_part_rects() + self.floor_object_rects(), self.others(), [False]
         for turn in NEAR_TURNS:
             for distance in NEAR_DISTANCES:
                 angle = toward_here + float(turn)
                 xy = target + distance * np.array([math.cos(angle), math.sin(angle)])
-                if self.plan.disk_is_free(float(xy[0]), float(xy[1]), self.radius + CLEARANCE, obstacles):
+                if self._free(xy, self.radius + CLEARANCE, still, others, blocked):
                     return float(xy[0]), float(xy[1]), angle + math.pi
-        raise NavigationError(f"no free base pose near {np.round(target, 2).tolist()} on the floor")
+        raise self._failure(f"no free base pose near {np.round(target, 2).tolist()} on the floor", blocked[0])
 
     def front_normal(self, node: str) -> np.ndarray:
         """Unit horizontal vector (shape (2,)) out of the front of furniture `node`."""
@@ -113,19 +158,28 @@ class Navigator:
 
     def path_to(self, goal: tuple[float, float, float], reach: float = 0.0) -> list[tuple[float, float]]:
         """Waypoints (x, y) in m from the base's current position to `goal`, keeping `reach` m (the base, or a
-        carried object held out in front, whichever sticks out further) from open doors and drawers."""
+        carried object held out in front, whichever sticks out further) from open doors and drawers, and the base
+        clear of objects standing on the floor and of `others`."""
         start = tuple(self.controller.q()[:2])
-        extra = np.zeros_like(self.blocked)
-        reach = max(reach, self.radius)
-        for rect in self.open_part_rects():
-            grown = (rect[0] - reach, rect[1] - reach, rect[2] + reach, rect[3] + reach)
-            i0, j0 = self.plan.cell(grown[0], grown[1])
-            i1, j1 = self.plan.cell(grown[2], grown[3])
-            extra[max(i0, 0) : i1 + 1, max(j0, 0) : j1 + 1] = True
-        path = find_path(self.blocked, self.plan, start, goal[:2], extra)
+        reach, base = max(reach, self.radius), self.radius + CLEARANCE
+        still = self._grid([(r, reach) for r in self.open_part_rects()]
+                           + [(r, base) for r in self.floor_object_rects()])
+        others = self._grid([(r, base) for r in self.others()])
+        path = find_path(self.blocked, self.plan, start, goal[:2], still | others)
         if path is None:
-            raise NavigationError(f"no path from {np.round(start, 2).tolist()} to {np.round(goal[:2], 2).tolist()}")
+            blocked = others.any() and find_path(self.blocked, self.plan, start, goal[:2], still) is not None
+            raise self._failure(f"no path from {np.round(start, 2).tolist()} to {np.round(goal[:2], 2).tolist()}",
+                                blocked)
         return path
+
+    def _grid(self, grown_by: list[tuple[tuple[float, float, float, float], float]]) -> np.ndarray:
+        """The grid cells (shape of `blocked`) of world rectangles (x0, y0, x1, y1, m) each grown by its m."""
+        cells = np.zeros_like(self.blocked)
+        for rect, grow in grown_by:
+            i0, j0 = self.plan.cell(rect[0] - grow, rect[1] - grow)
+            i1, j1 = self.plan.cell(rect[2] + grow, rect[3] + grow)
+            cells[max(i0, 0) : i1 + 1, max(j0, 0) : j1 + 1] = True
+        return cells
 
     def drive_to(self, goal: tuple[float, float, float], tuck: np.ndarray, reach: float = 0.0,
                  speed: float = SPEED_FRACTION, ramp: float | None = None) -> float:

@@ -120,9 +120,14 @@ class PartMover:
         return float(c[1] + np.sign(c[1]) * h[1])
 
     def _free(self, xy: np.ndarray, motion: PartMotion, value: float) -> bool:
-        """The base disk at xy (m) is clear of the floor plan, other open parts and the part at `value`."""
+        """The base disk at xy (m) is clear of the floor plan, open parts of other furniture, objects standing on
+        the floor and the part at `value`. The furniture's own other open parts (a drawer open above the one being
+        moved) are left to the clearance check of each configuration: their footprints overlap the part's, and the
+        base may stand under them."""
+        furniture = self.world.articulations[motion.name].furniture
         others = [r for name, r in zip(self.navigator.part_geoms, self._open_rects(), strict=True)
-                  if name != motion.name and r is not None]
+                  if self.world.articulations[name].furniture != furniture and r is not None]
+        others += self.navigator.floor_object_rects()
         free = self.navigator.radius + CLEARANCE
         if not self.navigator.plan.disk_is_free(float(xy[0]), float(xy[1]), free, others):
             return False

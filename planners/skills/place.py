@@ -26,7 +26,8 @@ from planners.skills.result import SkillResult
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 CARRY_SLIP = 0.03  # m the held object may shift in the hand while carried before a place gives up
-SHELF_SPOTS = 6  # free spots on a shelf tried for a place, nearest the front first,
+SHELF_SPOTS = 6  # free spots tried for a place inside, nearest the front first, then half as many on each other
+# shelf (rack),
 SHELF_SPOT_GAP = 0.05  # m apart at least
 EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
 RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to let go (inside a shelf)
@@ -189,15 +190,20 @@ class Place:
     def _place_in_shelf(self, name: str, node: str, places: list[int]) -> SkillResult:
         """Put the held object on a shelf inside cabinet `node` (`places`: its shelf indices), the reverse of
         `_pick_from_shelf`: from a base pose where the object and the arm clear the cabinet and its contents, in
-        SIDE_LIFT m above a free spot (spots nearest the front first), down, release, and straight out."""
+        SIDE_LIFT m above a free spot (spots nearest the front first, then those of each shelf none of those is on),
+        down, release, and straight out."""
         index = self.world.object_index(name)
         size = np.asarray(CATALOG[self.world.layout.objects[index].cls].size)
         furniture = self.navigator.furniture[node]
         out = self.navigator.front_normal(node)
         front = np.array(furniture.pos) + out * furniture.size[1] / 2
-        spots = [spot for k in places for spot in self.spots.free_spots(name, node, k, self.rng, {index})]
-        spots = _spread(sorted(spots, key=lambda spot: float(np.dot(front - spot.pos[:2], out))), SHELF_SPOT_GAP,
-                        SHELF_SPOTS)
+        drawn = sorted(((spot, k) for k in places for spot in self.spots.free_spots(name, node, k, self.rng, {index})),
+                       key=lambda pair: float(np.dot(front - pair[0].pos[:2], out)))
+        spots = _spread([spot for spot, _ in drawn], SHELF_SPOT_GAP, SHELF_SPOTS)
+        on = {id(spot): k for spot, k in drawn}
+        missed = [k for k in places if all(on[id(spot)] != k for spot in spots)]  # shelves (racks) under the others'
+        spots += [spot for k in missed for spot in _spread([s for s, at in drawn if at == k], SHELF_SPOT_GAP,
+                                                           SHELF_SPOTS // 2)]
         if not spots:
             return SkillResult(False, f"place: no free spot for {name} inside {node}")
         posture, held = self.arm.carry(), self.arm.held_object(name)
@@ -279,7 +285,7 @@ class Place:
         stays)."""
         quat = matrix_to_quat(rotation)
         reach = self.arm.held_reach()
-        obstacles = self.navigator.open_part_rects()
+        obstacles = self.navigator.obstacles()
         for base in base_candidates(points[-1], rotation, self.controller.q()[:2]):
             free = self.navigator.radius + CLEARANCE
             if not self.navigator.plan.disk_is_free(base[0], base[1], free, obstacles):

@@ -11,8 +11,11 @@ furniture's places; doors and drawers are run by a `PartMover` (`planners.skills
 
 from __future__ import annotations
 
+from collections.abc import Collection
+
 import numpy as np
 
+from homer_sim.graph import ON
 from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
 from homer_sim.robot_spec import ROBOT, RobotSpec
@@ -62,6 +65,29 @@ class Robot:
         """Put the held object at a free spot ON or INSIDE furniture `node`, release it and retreat (see
         `planners.skills.place.Place.place`)."""
         return self._place.place(node, relation)
+
+    def set_down(self, avoid: Collection[str] = (), tries: int = 3) -> SkillResult:
+        """Put the held object down for a while on the open top nearest the robot (furniture with a place ON it,
+        not in `avoid`, say furniture with doors), the `tries` nearest in turn: done when it stands on the top or
+        on what lies there, the hand empty."""
+        name = self.held
+        if name is None:
+            return SkillResult(False, "set down: the robot holds nothing")
+        x, y = self.controller.q()[:2]
+        tops = sorted((float(np.hypot(f.pos[0] - x, f.pos[1] - y)), f.name) for f in self.world.layout.furniture
+                      if f.name not in avoid and f.name in self.navigator.furniture
+                      and self.spots.places_of(f.name, ON))
+        result = SkillResult(False, f"set down: no open top for {name}")
+        for _, top in tops[:tries]:
+            result = self.place(top, ON)
+            if result.success or self.held is None:
+                break
+        on = self.observer.update().parent_of(name)
+        while on in self.world.object_names:  # on what lies on the top
+            on = self.observer.update().parent_of(on)
+        if self.held is None and on in self.navigator.furniture and on not in avoid and not self.arm.fallen_over(name):
+            return SkillResult(True)
+        return result
 
     def retract(self) -> None:
         """Tuck the arm in place (see `planners.motion.arm.Arm.retract`)."""

@@ -4,8 +4,11 @@ The triples are the person's moves in the training days of a dataset made by `ho
 stores them and its `DayKey`). Each triple is tried once, from the apartment's state at its first occurrence:
 the day is lived again exactly (`Generator.replay`, in a world that also holds the robot at its parking pose)
 up to the last snapshot before the move at which the object rests on its source and is not in the person's
-hand. From there only the robot acts, with its real skills: it opens what closes over the source and the
-destination, picks the object, carries it, places it, and closes what it opened.
+hand, or, where no snapshot has it so (put there and taken away again within one grid step, or in the hand at
+each), up to the person's last action before the move after which it does. From there only the robot acts,
+with its real skills: it opens what closes over the source and the destination, picks the object, carries it,
+places it, and closes what it opened (between two pieces of furniture that close, one at a time: the object is
+set down on an open top between them, `relocate`).
 
 Success: the scene-graph observer puts the object ON or INSIDE the destination, it stands as it should (an
 object that is not cloth or a ball stands up, `Arm.fallen_over`), and no other object (but what rides on the
@@ -121,6 +124,10 @@ def quick_subset(tried: list[Occurrence], classes: dict[str, str]) -> list[Occur
 
 
 # --- one trial ------------------------------------------------------------------------------------------
+class _Stop(Exception):
+    """Raised after the person's last action before a move, to stop living the day there."""
+
+
 class Bench:
     """The suite's worlds: a generator for the person's days and the robot's world they are lived again in."""
 
@@ -146,24 +153,61 @@ class Bench:
 
     def live_until(self, occurrence: Occurrence) -> str | None:
         """Live the occurrence's day up to the last snapshot before the move at which the object rests on its
-        source outside the person's hand (the latest REPLAYS snapshots the recorded day has it there are tried);
-        None when found, else why not."""
+        source outside the person's hand (the latest REPLAYS snapshots the recorded day has it there are tried),
+        else up to the person's last action before the move after which it does (`_before_the_move`); None when
+        found, else why not."""
         day = self.day(occurrence)
         last = int(occurrence.minute // GRID_MIN) * GRID_MIN
         nodes = self.dataset.meta.nodes
         obj, source = nodes.index(occurrence.obj), nodes.index(occurrence.source)
-        found = f"{occurrence.obj} rested on {occurrence.source} at no snapshot of the day before the move"
         recorded = [int(m) for m, parent in zip(day.minutes, day.parent[:, obj], strict=True)
                     if m <= last and parent == source]  # where the recorded day has it on its source
         for minute in recorded[::-1][:REPLAYS]:
             self.generator.replay(occurrence.household, day.replay_key(), day.schedule, executor=self.executor,
                                   end_min=minute)
-            graph = self.executor.observer.update()
-            if graph.parent_of(occurrence.obj) == occurrence.source and occurrence.obj not in set(
-                    self.executor.avatar.carried()):
+            if self._on_source(occurrence):
                 return None
-            found = f"at {minute} min {occurrence.obj} was on {graph.parent_of(occurrence.obj)} or in the hand"
-        return found
+        return self._before_the_move(occurrence, day)
+
+    def _before_the_move(self, occurrence: Occurrence, day: Day) -> str | None:
+        """Live the occurrence's day again up to the person's last action within GRID_MIN minutes before the move
+        after which the object rests on its source outside the person's hand (found by living it once, then lived
+        again up to there); None when there is one, else why not."""
+        last_free: list[int] = []
+
+        def watch(index: int, events: list) -> None:
+            if occurrence.minute - GRID_MIN <= events[index][0] < occurrence.minute and self._on_source(occurrence):
+                last_free.append(index)
+            if index + 1 >= len(events) or events[index + 1][0] >= occurrence.minute:
+                raise _Stop
+
+        self._live(occurrence, day, watch)
+        if not last_free:
+            return (f"{occurrence.obj} rested on {occurrence.source} outside the person's hand at no snapshot and "
+                    f"after no action in the {GRID_MIN} min before the move")
+        self._live(occurrence, day, lambda index, events: _stop_after(index, last_free[-1]))
+        return None
+
+    def _live(self, occurrence: Occurrence, day: Day, after_action) -> None:
+        """Live the occurrence's day from its start until `after_action(index, events)`, called after each of the
+        person's actions, raises _Stop."""
+        scripts = self.generator.scripts_for(occurrence.household)
+        events, last = self.executor.begin_day(list(day.schedule), scripts, day.replay_key().streams()[1])
+        try:
+            self.executor.live(events, last, after_action=lambda index: after_action(index, events))
+        except _Stop:
+            pass
+
+    def _on_source(self, occurrence: Occurrence) -> bool:
+        """Whether the occurrence's object rests on its source now, outside the person's hand."""
+        graph = self.executor.observer.update()
+        return graph.parent_of(occurrence.obj) == occurrence.source and occurrence.obj not in set(
+            self.executor.avatar.carried())
+
+
+def _stop_after(index: int, last: int) -> None:
+    if index >= last:
+        raise _Stop
 
 
 def _anchor(graph, world, node: str) -> str:
@@ -176,22 +220,73 @@ def _anchor(graph, world, node: str) -> str:
 
 def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, destination: str) -> str | None:
     """Open what closes over `source` and `destination`, pick `obj`, place it, close what was opened; None when
-    every skill succeeded, else the first failure's reason prefixed with its skill."""
+    every skill succeeded, else the first failure's reason prefixed with its skill. Where both close (two pieces
+    of furniture with doors or drawers), one is open at a time: two open doors can leave no way between them (a
+    cupboard's and the dishwasher's across the kitchen), and a full hand opens and closes nothing; so the object
+    is set down on the nearest open top (`Robot.set_down`) while the source closes and the destination opens."""
     graph = robot.observer.update()
     anchor = _anchor(graph, robot.world, source)
-    parts = [p for node in dict.fromkeys((anchor, destination)) for p in containers.get(node, [])]
+    at = anchor if anchor in robot.navigator.furniture else None
+    first = _holding(robot.world, containers.get(anchor, []), obj, _inside(graph, robot.world, obj))
+    second = [p for p in containers.get(destination, []) if p not in first]
+    both = bool(first and second)
+    failure = _open(robot, first if both else first + second)
+    if failure is not None:
+        return failure
+    result = robot.pick(obj, at, into=destination)
+    if not result.success:
+        return f"pick: {result.reason}"
+    if both:
+        result = robot.set_down(containers)
+        failure = None if result.success else f"set-down: {result.reason}"
+        failure = failure or _close(robot, first) or _open(robot, second)
+        if failure is not None:
+            return failure
+        result = robot.pick(obj, _anchor(robot.observer.update(), robot.world, obj), into=destination)
+        if not result.success:
+            return f"pick: {result.reason}"
+    result = robot.place(destination)
+    if not result.success:
+        return f"place: {result.reason.removeprefix('place: ')}"
+    return _close(robot, second if both else first + second)
+
+
+def _inside(graph, world, obj: str) -> bool:
+    """Whether `obj` (or what it rests on) is INSIDE the furniture it is reached at, not on it."""
+    from homer_sim.graph import INSIDE, RELATION_NAMES
+
+    movable = set(world.object_names)
+    while graph.parent_of(obj) in movable:
+        obj = graph.parent_of(obj)
+    return graph.relation_of(obj) == RELATION_NAMES[INSIDE]
+
+
+def _holding(world, parts: list[str], obj: str, inside: bool) -> list[str]:
+    """Of a piece of furniture's `parts` (doors or drawers) those to open to take `obj` out: of drawers, the one
+    it lies in if it is `inside` (the highest whose body is below it); every door (a door covers every shelf
+    behind it). A drawer left open below or above another keeps the robot from reaching the other's handle as it
+    closes."""
+    drawers = [p for p in parts if world.articulations[p].joint_type == "slide"]
+    z = world.object_pose(obj)[0][2]
+    below = [p for p in drawers if world.data.xpos[world.model.body(p).id][2] < z]
+    lying_in = max(below, key=lambda p: world.data.xpos[world.model.body(p).id][2], default=None)
+    return [p for p in parts if p not in drawers or (inside and p == lying_in)]
+
+
+def _open(robot, parts: list[str]) -> str | None:
     for part in parts:
         result = robot.open_articulation(part)
         if not result.success:
             return f"open {part}: {result.reason}"
-    result = robot.pick(obj, anchor if anchor in robot.navigator.furniture else None, into=destination)
-    if not result.success:
-        return f"pick: {result.reason}"
-    result = robot.place(destination)
-    if not result.success:
-        return f"place: {result.reason.removeprefix('place: ')}"
+    return None
+
+
+def _close(robot, parts: list[str]) -> str | None:
+    """Close `parts` in reverse order, each tried twice (as the assisted day's robot does); None, or the failure."""
     for part in parts[::-1]:
         result = robot.close_articulation(part)
+        if not result.success:
+            result = robot.close_articulation(part)
         if not result.success:
             return f"close {part}: {result.reason}"
     return None

@@ -88,8 +88,8 @@ def test_actions_name_movable_objects_and_places_the_robot_can_put_them_on(setup
     bad[0] = (scene.index["cupboard"], scene.index["table_dining_room"])
     with pytest.raises(HomerError, match="cupboard is a furniture, not a movable object"):
         env.step(bad)
-    bad[0] = (scene.index["milk"], scene.index["dining_room"])
-    with pytest.raises(HomerError, match="destination dining_room is a room"):
+    bad[0] = (scene.index["milk"], scene.index["bowl"])
+    with pytest.raises(HomerError, match="destination bowl is a object"):
         env.step(bad)
 
 

@@ -77,19 +77,6 @@ def test_containers_are_opened_before_the_pick_and_closed_after_the_place() -> N
     assert plan.steps[2] == PlanStep("pick", "bowl", "cupboard", "bowl")
 
 
-def test_a_move_between_containers_opens_both_before_the_pick() -> None:
-    graph = _graph()
-    plan = _plan(graph, _rollout(graph, {"milk": [("cupboard", 0.9)] * 3}))
-    actions = [(s.action, s.target) for s in plan.steps]
-    assert actions[:2] == [("open", "fridge/door"), ("open", "cupboard/left")]
-    assert actions.index(("pick", "milk")) < actions.index(("place", "cupboard"))
-    assert {a for a, _ in actions[-3:]} == {"close"}
-    # A container the person left open is neither opened nor closed by the robot.
-    plan = _plan(graph, _rollout(graph, {"milk": [("cupboard", 0.9)] * 3}), already_open=("fridge",))
-    assert ("open", "fridge/door") not in [(s.action, s.target) for s in plan.steps]
-    assert ("close", "fridge/door") not in [(s.action, s.target) for s in plan.steps]
-
-
 def test_the_threshold_gates_moves_and_reports_them() -> None:
     graph = _graph()
     rollout = _rollout(graph, {"bowl": [("table", 0.4)] * 3, "cereal": [("table", 0.8)] * 3})
@@ -113,6 +100,30 @@ def test_carried_excluded_and_unplaceable_moves_are_skipped_with_reasons() -> No
     assert reasons["bowl"] == "in the person's hand" and reasons["cereal"] == "too flat"
     assert "destination bowl is a object" in reasons["spoon"]
     assert all(s.obj == "milk" for s in plan.steps if s.action in ("pick", "place"))
+
+
+def test_from_one_container_into_another_one_is_open_at_a_time() -> None:
+    graph = _graph()
+    plan = _plan(graph, _rollout(graph, {"milk": [("cupboard", 0.9)] * 3}))
+    assert [(s.action, s.target, s.node) for s in plan.steps] == [
+        ("open", "fridge/door", "fridge"), ("pick", "milk", "fridge"), ("set_down", "milk", ""),
+        ("close", "fridge/door", "fridge"), ("open", "cupboard/left", "cupboard"),
+        ("open", "cupboard/right", "cupboard"), ("pick", "milk", ""), ("place", "cupboard", "cupboard"),
+        ("close", "cupboard/right", "cupboard"),
+        ("close", "cupboard/left", "cupboard")]
+    opened = _plan(graph, _rollout(graph, {"milk": [("cupboard", 0.9)] * 3}), already_open={"cupboard"})
+    assert "set_down" not in [s.action for s in opened.steps]  # the destination open already: straight there
+    # A container the person left open is neither opened nor closed by the robot.
+    plan = _plan(graph, _rollout(graph, {"milk": [("cupboard", 0.9)] * 3}), already_open=("fridge",))
+    assert ("open", "fridge/door") not in [(s.action, s.target) for s in plan.steps]
+    assert ("close", "fridge/door") not in [(s.action, s.target) for s in plan.steps]
+
+
+def test_a_room_is_a_destination_its_floor() -> None:
+    graph = _graph()
+    plan = _plan(graph, _rollout(graph, {"milk": [("kitchen", 0.9)] * 3}))
+    assert [(r.obj, r.destination) for r in plan.relocations] == [("milk", "kitchen")] and plan.skipped == ()
+    assert PlanStep("place", "kitchen", "kitchen", "milk") in plan.steps
 
 
 def test_held_objects_stay_until_the_person_moves_them_or_the_window_passes() -> None:

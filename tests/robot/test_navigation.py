@@ -1,0 +1,60 @@
+"""The navigator's obstacles beyond the floor plan: objects standing on the floor and what moves by itself."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from homer_sim.world import World
+from planners.motion.navigation import IN_THE_WAY, NavigationError
+from planners.robot import add_robot
+from planners.skills import Robot
+
+
+@pytest.fixture(scope="module")
+def robot() -> Robot:
+    world = World(extras=[add_robot])
+    world.reset_settled()
+    return Robot(world, np.random.default_rng(0))
+
+
+def _distance(xy, rect) -> float:
+    return float(np.hypot(max(rect[0] - xy[0], 0.0, xy[0] - rect[2]), max(rect[1] - xy[1], 0.0, xy[1] - rect[3])))
+
+
+def test_objects_standing_on_the_floor_are_kept_out_of_the_base_path(robot: Robot) -> None:
+    navigator, world = robot.navigator, robot.world
+    rects = navigator.floor_object_rects()
+    low = [n for n in world.object_names if world.object_pose(n)[0][2] < 0.3 and
+           navigator.furniture.get(robot.observer.update().parent_of(n)) is None]
+    assert low and len(rects) == len(low)  # the bin, the vacuum cleaner... and nothing on furniture
+    for name in low:
+        xy = world.object_pose(name)[0][:2]
+        rect = next(r for r in rects if r[0] < xy[0] < r[2] and r[1] < xy[1] < r[3])
+        pose = navigator.stand_near(tuple(xy))  # beside it, the base clear of it
+        assert _distance(pose[:2], rect) >= navigator.radius
+        far = xy + 1.2 * (np.asarray(pose[:2]) - xy) / np.linalg.norm(np.asarray(pose[:2]) - xy)
+        for other in (xy + (xy - far), far):  # a path past it, from one side to the other, keeps clear of it
+            if not navigator.plan.disk_is_free(*other, navigator.radius + 0.05, navigator.obstacles()):
+                continue
+            path = np.array(navigator.path_to((*other, 0.0)))
+            assert min(_distance(p, rect) for p in path[1:-1]) >= navigator.radius
+
+
+def test_a_way_only_someone_blocks_fails_saying_so(robot: Robot) -> None:
+    navigator = robot.navigator
+    goal = navigator.stand_pose("table_dining_room", navigator.furniture["table_dining_room"].pos[:2])
+    x, y = goal[:2]
+    try:
+        navigator.others = lambda: [(x - 4.0, y - 4.0, x + 4.0, y + 4.0)]  # someone all round it
+        with pytest.raises(NavigationError, match=IN_THE_WAY):
+            navigator.stand_pose("table_dining_room", navigator.furniture["table_dining_room"].pos[:2])
+        with pytest.raises(NavigationError, match=IN_THE_WAY):
+            navigator.path_to(goal)
+        navigator.others = lambda: [(50.0, 50.0, 51.0, 51.0)]  # far away: nothing in the way
+        assert navigator.path_to(goal)
+    finally:
+        navigator.others = list
+    with pytest.raises(NavigationError) as error:  # a way blocked by the apartment says nothing of anyone
+        navigator.path_to((-40.0, -40.0, 0.0))
+    assert IN_THE_WAY not in str(error.value)
