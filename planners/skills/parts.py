@@ -22,7 +22,7 @@ from enum import Enum
 
 import numpy as np
 
-from homer_sim.graph import INSIDE
+from homer_sim.graph import INSIDE, ON
 from homer_sim.home.furniture import Furniture, furniture_geometry
 from homer_sim.home.spots import Spots
 from planners.grasps.geometry import axis_rotation, matrix_to_quat
@@ -175,3 +175,13 @@ def shelves_inside(spots: Spots, furniture: Furniture | None, node: str, relatio
     if furniture is None or not behind_a_door(furniture):
         return []
     return [k for k, p in spots.places_of(node, relation) if p.relation == INSIDE and p.part is None]
+
+
+def covered_places(spots: Spots, node: str, relation: int | None) -> list[int]:
+    """Indices of the fixed places of furniture `node` that a place with `relation` goes to and that lie under
+    another fixed place of it (an open shelf's lower levels): a hand coming down from above meets the level
+    above, so they are reached from the front, as shelves."""
+    fixed = [p for relation_ in (ON, INSIDE) for _, p in spots.places_of(node, relation_) if p.part is None]
+    return [k for k, p in spots.places_of(node, relation) if p.part is None and any(
+        q.center[2] > p.center[2] and abs(q.center[0] - p.center[0]) < q.half_xy[0] + p.half_xy[0]
+        and abs(q.center[1] - p.center[1]) < q.half_xy[1] + p.half_xy[1] for q in fixed)]
