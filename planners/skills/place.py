@@ -71,11 +71,11 @@ class Place:
         failures = []
         for spot in spots:  # each lowered onto until one is let go on (or the object is lost)
             target = np.array(spot.pos)
-            outcome = self._lower_checked(name, node, target)
-            if outcome is None:  # no base pose with a clear way down: from in front of the spot, unchecked
-                failure, short = self._carry_to(name, node, target)
-                if failure is not None:
-                    return failure
+            failure, short = self._carry_to(name, node, target)
+            if failure is not None:
+                return failure
+            outcome = None if short else self._lower_checked(name, node, target)
+            if outcome is None:  # no clear way down from here: straight down from above the spot, unchecked
                 outcome = self._lower_onto(name, node, target, short)
             if outcome.success or self.arm.held is None:
                 return outcome
@@ -193,23 +193,26 @@ class Place:
         return self._let_go(name, node, opening, self._retreat(release, quat))
 
     def _lower_checked(self, name: str, node: str, target: np.ndarray) -> SkillResult | None:
-        """Lower the held `name` onto `target` (m, a spot on furniture `node`) from a base pose where the way down
-        from APPROACH m above it, the object as it hangs in the hand, keeps the arm and the object clear of the
-        apartment (see `_drive_for`), let go and retreat; None (the robot stays) where no base pose gives that."""
-        posture, held = self.arm.carry(), self.arm.held_object(name)
+        """Lower the held `name` onto `target` (m, a spot on furniture `node`) from where the robot stands, the
+        base kept there, along a way (eased to APPROACH m above the spot, then straight down, the object as it
+        hangs in the hand) that keeps the arm and the object clear of the apartment; let go and retreat. None
+        (nothing moved) where no such way is found."""
+        held = self.arm.held_object(name)
         rotation = self.world.data.site("robot/grip").xmat.reshape(3, 3).copy()
+        quat = matrix_to_quat(rotation)
         release = target + np.array([0.0, 0.0, 0.01]) - rotation @ held.position
-        planned = self._drive_for([release + np.array([0.0, 0.0, APPROACH]), release], rotation, posture, held)
-        if planned is None:
+        above = release + np.array([0.0, 0.0, APPROACH])
+        start = self.ik.solve(self.controller.target, above, quat, base_cost=ARC_BASE_COST)
+        if not start.converged or not self.clearance.clear(start.q, held=held):
             return None
-        slip = float(np.linalg.norm(self.arm.held_offset(name) - held.position))
-        if slip > CARRY_SLIP:
-            return self._slipped(name, slip)
-        ease, path = planned
-        self._ease_to(ease, path[0])
-        self.controller.move_through(path[1:])
+        path = self.arm.checked_line(start.q, [above, release], quat, held)
+        ease = None if path is None else self._ease_path(self.controller.target, start.q, held)
+        if ease is None:
+            return None
+        self._ease_to(ease, start.q)
+        self.controller.move_through(path)
         self.controller.settle(0.003)
-        return self._release_on(name, node, target, release, matrix_to_quat(rotation))
+        return self._release_on(name, node, target, release, quat)
 
     def _reachable(self, name: str, node: str, target: np.ndarray) -> bool:
         """Whether the hand, holding `name` as it does now, reaches over `target` (m, a spot on furniture `node`) from
