@@ -199,6 +199,21 @@ class Pick:
                 return False
         return True
 
+    def _neighbours_struck(self, name: str, path: list[np.ndarray], opening: float) -> list[str]:
+        """The objects other than `name` that the fingers, open `opening` m per finger, touch (deeper than a graze)
+        along the descent `path` (configurations, each shape (13,)) onto a grasp: they would push them over or
+        rest on them (a toilet roll's shelf grasp came down on the perfume beside it and the roll fell out)."""
+        n_body = self.controller.n_body
+        model = self.world.model
+        bodies = {int(b): n for n, b in zip(self.world.object_names, self.world.object_body_ids, strict=True)}
+        struck: set[str] = set()
+        for q in path:
+            q = q.copy()
+            q[n_body:] = opening
+            struck |= {bodies[b] for b in (int(model.geom_bodyid[g]) for g in self.clearance.finger_contacts(q))
+                       if b in bodies}
+        return sorted(struck - {name})
+
     def _pick_from_shelf(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
                          out: np.ndarray | None = None, replan: bool = True) -> SkillResult:
         """Pick `name` from a shelf inside cabinet `node`: each grasp of `shelf_grasps` in turn, from a base
@@ -276,6 +291,9 @@ class Pick:
         planned = self._descent(above, grasp.position, quat, seed=path_in[-1])  # nothing moved yet
         if planned is not None and not self._closing_clear(planned[-1], grasp.pre_opening):
             return SkillResult(False, "a closing finger would strike something other than the object")
+        struck = None if planned is None else self._neighbours_struck(name, planned, grasp.pre_opening)
+        if struck:
+            return SkillResult(False, f"an open finger would come down on {', '.join(struck)}")
         self.arm.reach(path_in[0], grip=grasp.pre_opening)
         if len(path_in) > 1:
             self.controller.move_through(path_in[1:], grip=grasp.pre_opening)
