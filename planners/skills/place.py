@@ -125,11 +125,15 @@ class Place:
         if anchor in self.navigator.furniture:
             failure, short = self._carry_to(name, anchor, target)
             return failure if failure is not None else self._lower_onto(name, node, target, short)
+        held_at = self.arm.held_offset(name)
         try:
             self.navigator.drive_to(self.navigator.stand_near(tuple(target[:2])), self.arm.carry(),
                                     self.arm.held_reach(), **CARRY_MOTION)
         except HomerError as error:
             return SkillResult(False, f"place: {error}")
+        slip = float(np.linalg.norm(self.arm.held_offset(name) - held_at))
+        if slip > CARRY_SLIP:
+            return self._slipped(name, slip)
         return self._lower_onto(name, node, target, short=False)
 
     def _carry_to(self, name: str, node: str, target: np.ndarray) -> tuple[SkillResult | None, bool]:
