@@ -187,9 +187,13 @@ class Place:
     def _release_on(self, name: str, node: str, target: np.ndarray, release: np.ndarray, quat: np.ndarray
                     ) -> SkillResult:
         """With the held `name` lowered for `target` (m, its spot on `node`; the grip site at `release`, m, at
-        `quat`): let go and retreat, unless it stopped more than STOPPED_ABOVE m above the spot (on something):
-        then back up APPROACH m, still holding it."""
-        stopped = float(self.world.object_pose(name)[0][2] - target[2]) - 0.01
+        `quat`): let go and retreat, unless its lowest point stopped more than STOPPED_ABOVE m above where its bottom
+        goes (it came down on something): then back up APPROACH m, still holding it."""
+        index = self.world.object_index(name)
+        size = np.asarray(CATALOG[self.world.layout.objects[index].cls].size)
+        tilt = np.abs(self.world.data.xmat[self.world.object_body_ids[index]].reshape(3, 3)[2])
+        low = float(self.world.object_pose(name)[0][2] - tilt @ size / 2)  # its lowest point (it may hang tilted)
+        stopped = low - float(target[2] - size[2] / 2) - 0.01
         if stopped > STOPPED_ABOVE:
             self.arm.grip_line(release + np.array([0.0, 0.0, APPROACH]), quat)
             return SkillResult(False, f"place: {name} stopped {stopped * 100:.1f} cm above its spot on {node}")
