@@ -40,7 +40,6 @@ HANDLE_OFFSET = 0.004  # m: grip site this far outward of the bar centre (finger
 EDGE_INSET = 0.025  # m from the free edge to the grip site
 EDGE_ABOVE_HANDLE = 0.15  # m: the edge is held this far above the handle
 PRE_OPENING = 0.03  # m per finger before closing on a 2 cm bar or panel
-DRAWER_MARGIN = 0.02  # m beyond a drawer's interior box a point still counts as in the drawer
 COVERED = 0.5  # share of a place's area under a higher place of the same furniture above which it is a shelf
 MIN_HELD = 0.004  # m per finger: closed further means the fingers missed the 2 cm bar
 SLIP = 0.03  # m between the grip site and the grasp point on the part before a motion is aborted
@@ -177,27 +176,6 @@ def shelves_inside(spots: Spots, furniture: Furniture | None, node: str, relatio
     if furniture is None or not behind_a_door(furniture):
         return []
     return [k for k, p in spots.places_of(node, relation) if p.relation == INSIDE and p.part is None]
-
-
-def parts_to_open(world, spots: Spots, node: str, point: np.ndarray | None = None) -> list[str]:
-    """The doors and drawers (`<furniture>/<part>`) of `node` to open to reach `point` (m, an object there to
-    pick), or, with `point` None, to put something in or on `node` where `Spots.places_of` puts it: every hinged
-    door; of drawers only the one whose interior holds `point` (an open drawer above covers the ones below: the
-    forearm meets it), none to put something down where `node` has a fixed place for it (its top)."""
-    parts = [a for a in world.articulations.values() if a.furniture == node]
-    if any(a.joint_type == "hinge" for a in parts):
-        return [a.name for a in parts]
-    if point is None:
-        return [] if any(p.part is None for _, p in spots.places_of(node, None)) else [a.name for a in parts]
-    model, data = world.model, world.data
-    for art in parts:
-        body = model.jnt_bodyid[art.joint_id]
-        for site in range(model.nsite):
-            if model.site_bodyid[site] == body and "/interior_" in model.site(site).name:
-                local = data.site_xmat[site].reshape(3, 3).T @ (point - data.site_xpos[site])
-                if np.all(np.abs(local) <= model.site_size[site] + DRAWER_MARGIN):
-                    return [art.name]
-    return []
 
 
 def covered_places(spots: Spots, node: str, relation: int | None) -> list[int]:

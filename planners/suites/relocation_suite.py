@@ -175,17 +175,11 @@ def _anchor(graph, world, node: str) -> str:
 
 
 def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, destination: str) -> str | None:
-    """Open what closes over `obj` on `source` and over where it goes on `destination` (`parts_to_open`), pick
-    `obj`, place it, close what was opened; None when every skill succeeded, else the first failure's reason
-    prefixed with its skill."""
-    from planners.skills.parts import parts_to_open
-
+    """Open what closes over `source` and `destination`, pick `obj`, place it, close what was opened; None when
+    every skill succeeded, else the first failure's reason prefixed with its skill."""
     graph = robot.observer.update()
     anchor = _anchor(graph, robot.world, source)
-    wanted = parts_to_open(robot.world, robot.spots, anchor, robot.world.object_pose(obj)[0])
-    if destination in containers:
-        wanted += parts_to_open(robot.world, robot.spots, destination)
-    parts = list(dict.fromkeys(wanted))
+    parts = [p for node in dict.fromkeys((anchor, destination)) for p in containers.get(node, [])]
     for part in parts:
         result = robot.open_articulation(part)
         if not result.success:
