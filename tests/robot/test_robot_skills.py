@@ -173,16 +173,3 @@ def test_open_shelves_lower_levels_are_covered_and_a_showers_floor_is_not(world:
     assert covered_places(spots, "shower", None) == []  # its small soap shelf covers little of the floor
     assert covered_places(spots, "table_dining_room", None) == []
 
-
-def test_only_the_drawer_holding_an_object_is_opened_to_pick_it(world: World) -> None:
-    from homer_sim.home.spots import Spots
-    from planners.skills.parts import parts_to_open
-
-    spots = Spots(world)
-    for name, drawer in (("clothes_shirt", "dresser/drawer_0"), ("clothes_pants", "dresser/drawer_1"),
-                         ("clothes_jacket", "dresser/drawer_2")):
-        assert parts_to_open(world, spots, "dresser", world.object_pose(name)[0]) == [drawer]
-    assert parts_to_open(world, spots, "dresser", world.object_pose("wallet")[0]) == []  # on top
-    assert parts_to_open(world, spots, "dresser") == []  # put down on its top
-    assert parts_to_open(world, spots, "fridge", world.object_pose("milk")[0]) == [
-        a for a in world.articulations if a.startswith("fridge/")]
