@@ -22,7 +22,7 @@ from enum import Enum
 
 import numpy as np
 
-from homer_sim.graph import INSIDE
+from homer_sim.graph import INSIDE, ON
 from homer_sim.home.furniture import Furniture, furniture_geometry
 from homer_sim.home.spots import Spots
 from planners.grasps.geometry import axis_rotation, matrix_to_quat
@@ -40,6 +40,7 @@ HANDLE_OFFSET = 0.004  # m: grip site this far outward of the bar centre (finger
 EDGE_INSET = 0.025  # m from the free edge to the grip site
 EDGE_ABOVE_HANDLE = 0.15  # m: the edge is held this far above the handle
 PRE_OPENING = 0.03  # m per finger before closing on a 2 cm bar or panel
+COVERED = 0.5  # share of a place's area under a higher place of the same furniture above which it is a shelf
 MIN_HELD = 0.004  # m per finger: closed further means the fingers missed the 2 cm bar
 SLIP = 0.03  # m between the grip site and the grasp point on the part before a motion is aborted
 BASE_CLEARANCE = 0.05  # m between the base and the moving part
@@ -175,3 +176,19 @@ def shelves_inside(spots: Spots, furniture: Furniture | None, node: str, relatio
     if furniture is None or not behind_a_door(furniture):
         return []
     return [k for k, p in spots.places_of(node, relation) if p.relation == INSIDE and p.part is None]
+
+
+def covered_places(spots: Spots, node: str, relation: int | None) -> list[int]:
+    """Indices of the fixed places of furniture `node` that a place with `relation` goes to and that lie under
+    another fixed place of it covering most of their area (an open shelf's lower levels; not a shower's floor
+    under its small soap shelf): a hand coming down from above meets the level above, so they are reached from
+    the front, as shelves."""
+    fixed = [p for relation_ in (ON, INSIDE) for _, p in spots.places_of(node, relation_) if p.part is None]
+    return [k for k, p in spots.places_of(node, relation) if p.part is None and any(
+        q.center[2] > p.center[2] and _overlap(q, p) > COVERED * 4.0 * p.half_xy[0] * p.half_xy[1] for q in fixed)]
+
+
+def _overlap(a, b) -> float:
+    """The area (m^2) two places' rectangles (furniture frame) share."""
+    return math.prod(max(0.0, min(a.center[i] + a.half_xy[i], b.center[i] + b.half_xy[i])
+                         - max(a.center[i] - a.half_xy[i], b.center[i] - b.half_xy[i])) for i in (0, 1))
