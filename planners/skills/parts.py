@@ -22,7 +22,7 @@ from enum import Enum
 
 import numpy as np
 
-from homer_sim.graph import INSIDE, ON
+from homer_sim.graph import INSIDE, ON, RELATION_NAMES
 from homer_sim.home.furniture import Furniture, furniture_geometry
 from homer_sim.home.spots import Spots
 from planners.grasps.geometry import axis_rotation, matrix_to_quat
@@ -192,3 +192,21 @@ def _overlap(a, b) -> float:
     """The area (m^2) two places' rectangles (furniture frame) share."""
     return math.prod(max(0.0, min(a.center[i] + a.half_xy[i], b.center[i] + b.half_xy[i])
                          - max(a.center[i] - a.half_xy[i], b.center[i] - b.half_xy[i])) for i in (0, 1))
+
+
+def parts_to_open(world, graph, parts, obj: str) -> list[str]:
+    """Of a piece of furniture's `parts` (doors or drawers, `<furniture>/<part>`) those to open to take `obj` out
+    of it (`graph`: the observed scene graph): every door (a door covers every shelf behind it) and, of drawers,
+    the one it lies in (the highest whose body is below it) if it (or what it rests on) is INSIDE, none if it is
+    on the top. A drawer left open below or above another keeps the robot from reaching the other's handle as it
+    closes."""
+    movable = set(world.object_names)
+    holder = obj
+    while graph.parent_of(holder) in movable:
+        holder = graph.parent_of(holder)
+    inside = graph.relation_of(holder) == RELATION_NAMES[INSIDE]
+    drawers = [p for p in parts if world.articulations[p].joint_type == "slide"]
+    z = world.object_pose(obj)[0][2]
+    height = {p: world.data.xpos[world.model.body(p).id][2] for p in drawers}
+    lying_in = max((p for p in drawers if height[p] < z), key=height.get, default=None)
+    return [p for p in parts if p not in drawers or (inside and p == lying_in)]
