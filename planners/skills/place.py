@@ -26,6 +26,7 @@ from planners.skills.parts import covered_places, shelves_inside
 from planners.skills.result import SkillResult
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
+NO_UP_FAMILIES = ("cloth", "sphere")  # shapes that lie as well one way as another: put down, none falls over
 CARRY_SLIP = 0.03  # m the held object may shift in the hand while carried before a place gives up
 TOP_SPOTS = 4  # free spots on an open top tried for a place (the first one no way down is blocked to),
 TOP_SPOT_GAP = 0.08  # m apart at least,
@@ -268,7 +269,8 @@ class Place:
         if parent != node or (inside and relation != RELATION_NAMES[INSIDE]):
             return SkillResult(False, f"place: {name} ended {relation} {parent}, not {'inside' if inside else 'on'} "
                                       f"{node}")
-        if self.arm.fallen_over(name):
+        family = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].family
+        if family not in NO_UP_FAMILIES and self.arm.fallen_over(name):
             return SkillResult(False, f"place: {name} fell over on {node}")
         return SkillResult(True)
 
