@@ -1,8 +1,11 @@
 """The `place` skill of `planners.skills.Robot`: put the held object down on or inside furniture, checked in physics.
 
-On an open top: lowered onto a free spot from above, let go, the hand drawn back. On a cabinet's shelf: carried
-in from a base pose where the object and the arm clear the cabinet, eased in slowly, let go and drawn straight
-out. Success is read back from the observed scene graph. Movement comes from `planners.motion.arm`.
+On an open top: lowered onto a free spot from above (spots the hand reaches from in front first, a few in turn;
+along a way checked clear of the apartment where one is found from where the carry stopped), let go, the hand
+drawn back; a lowering that stops on something backs up, still holding the object, and the next spot is tried.
+On a cabinet's shelf, or a level of an open shelf under another: carried in from a base pose where the object and
+the arm clear the furniture, eased in slowly, let go and drawn straight out. Success is read back from the
+observed scene graph. Movement comes from `planners.motion.arm`.
 """
 
 from __future__ import annotations
@@ -52,7 +55,9 @@ class Place:
         self.ik, self.clearance = arm.ik, arm.clearance
 
     def place(self, node: str, relation: int | None = None) -> SkillResult:
-        """Put the held object at a free spot ON or INSIDE furniture `node`, release it and retreat."""
+        """Put the held object at a free spot ON or INSIDE furniture `node`, release it and retreat: on its open
+        places, TOP_SPOTS spots in turn (those reached from the base pose in front of them first), then, where the
+        open ones gave none, on the levels under another from the front (`covered_places`)."""
         name = self.arm.held
         if name is None:
             return SkillResult(False, "place: the robot holds nothing")
