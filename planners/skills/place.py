@@ -1,8 +1,11 @@
 """The `place` skill of `planners.skills.Robot`: put the held object down on or inside furniture, checked in physics.
 
-On an open top: lowered onto a free spot from above, let go, the hand drawn back. On a cabinet's shelf: carried
-in from a base pose where the object and the arm clear the cabinet, eased in slowly, let go and drawn straight
-out. Success is read back from the observed scene graph. Movement comes from `planners.motion.arm`.
+On an open top: lowered onto a free spot from above (spots the hand reaches from in front first, a few in turn;
+along a way checked clear of the apartment where one is found from where the carry stopped), let go, the hand
+drawn back; a lowering that stops on something backs up, still holding the object, and the next spot is tried.
+On a cabinet's shelf, or a level of an open shelf under another: carried in from a base pose where the object and
+the arm clear the furniture, eased in slowly, let go and drawn straight out. Success is read back from the
+observed scene graph. Movement comes from `planners.motion.arm`.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from planners.skills.parts import covered_places, shelves_inside
 from planners.skills.result import SkillResult
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
+NO_UP_FAMILIES = ("cloth", "sphere")  # shapes that lie as well one way as another: put down, none falls over
 CARRY_SLIP = 0.03  # m the held object may shift in the hand while carried before a place gives up
 TOP_SPOTS = 4  # free spots on an open top tried for a place (the first one no way down is blocked to),
 TOP_SPOT_GAP = 0.08  # m apart at least,
@@ -52,7 +56,9 @@ class Place:
         self.ik, self.clearance = arm.ik, arm.clearance
 
     def place(self, node: str, relation: int | None = None) -> SkillResult:
-        """Put the held object at a free spot ON or INSIDE furniture `node`, release it and retreat."""
+        """Put the held object at a free spot ON or INSIDE furniture `node`, release it and retreat: on its open
+        places, TOP_SPOTS spots in turn (those reached from the base pose in front of them first), then, where the
+        open ones gave none, on the levels under another from the front (`covered_places`)."""
         name = self.arm.held
         if name is None:
             return SkillResult(False, "place: the robot holds nothing")
@@ -269,7 +275,8 @@ class Place:
         if parent != node or (inside and relation != RELATION_NAMES[INSIDE]):
             return SkillResult(False, f"place: {name} ended {relation} {parent}, not {'inside' if inside else 'on'} "
                                       f"{node}")
-        if self.arm.fallen_over(name):
+        family = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].family
+        if family not in NO_UP_FAMILIES and self.arm.fallen_over(name):
             return SkillResult(False, f"place: {name} fell over on {node}")
         return SkillResult(True)
 
