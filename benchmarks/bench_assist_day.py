@@ -21,6 +21,7 @@ REPO_ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO_ROOT))
 
 from benchmarks._common import emit, machine_info, pin_to_one_core, positive_int, setup_logging, summary
+from model.selection import default_method
 from scenarios.assist_eval import EvalSpec, assist_eval
 
 log = logging.getLogger("benchmarks.assist_day")
@@ -32,16 +33,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, required=True, help="dataset folder")
     parser.add_argument("--days", type=positive_int, default=2, help="test days per household (2)")
-    parser.add_argument("--method", default="markov", help="predictor or oracle (markov)")
+    parser.add_argument("--method", default=None,
+                        help="predictor or oracle (default: the best validated, model/validation_table.json)")
     parser.add_argument("--checkpoints", type=Path, default=None, help="predictor cache (default DATA/checkpoints)")
     args = parser.parse_args()
     setup_logging()
     cpu = pin_to_one_core()
-    spec = EvalSpec(str(args.data), args.method, checkpoints=str(args.checkpoints) if args.checkpoints else None)
+    spec = EvalSpec(str(args.data), args.method or default_method(),
+                    checkpoints=str(args.checkpoints) if args.checkpoints else None)
     with tempfile.TemporaryDirectory() as out:
         result = assist_eval(spec, days=args.days, out=Path(out), progress=False)
         walls = [json.loads(path.read_text())["wall_s"] for path in sorted((Path(out) / "days").glob("*.json"))]
-    emit({"benchmark": "assist_day", "machine": machine_info(cpu), "method": args.method, "days": len(walls),
+    emit({"benchmark": "assist_day", "machine": machine_info(cpu), "method": spec.method, "days": len(walls),
           "wall_s_per_day": summary(walls, 1), "target_s_per_day": TARGET_S_PER_DAY,
           "meets_target": summary(walls)["median"] <= TARGET_S_PER_DAY, "fetch_share": result["total"]["fetch_share"]})
 

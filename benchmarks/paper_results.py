@@ -5,11 +5,13 @@ Experiments (--experiments, default all):
   main      the default methods on all training days of each household; outcome counts for windows 10..120 min
             (every method tuned on its validation days at 30 min)
   ablation  gnn_no_attention and gnn_linear_time, same protocol
-  days      gnn, fremen, fremen_prior, static_semantic and markov on the first 5, 10, 20, 30, 40 training days
+  days      gnn, fremen, fremen_prior, static_semantic, markov and analogs on the first 5, 10, 20, 30, 40 training days
             (50 comes from `main`)
   pretrain  gnn pre-trained on the other four households' training days, fine-tuned on 5..50 days of each
 Files in OUT: main_table.md / main_table.json (30 and 40 min: mean and spread over households), windows.png,
-days.png, pretrain.png, ablation.md. One JSON object (the main table at 30 min and the file list) on stdout.
+days.png, pretrain.png, ablation.md, validation_table.md; and the validation table the robot's default predictor is
+chosen from (`model/validation_table.json`, see model/selection.py: each main run's tuning objective on its
+validation days). One JSON object (the main table at 30 min and the file list) on stdout.
 
     .venv/bin/python benchmarks/paper_results.py --data DIR --out DIR [--experiments main,ablation]
     .venv/bin/python benchmarks/paper_results.py --data DIR --out DIR --report   # files from the runs so far
@@ -54,13 +56,14 @@ from model.names import DEFAULT_METHODS  # noqa: E402
 from model.plots import days_curve, window_bars  # noqa: E402
 from model.predictor import Predictor  # noqa: E402
 from model.report import format_table  # noqa: E402
+from model.selection import TABLE, format_validation, validation_table  # noqa: E402
 from model.train import TORCH_THREADS  # noqa: E402
 from scenarios.cli.common import add_backend_arguments, backend_from_args  # noqa: E402
 
 log = logging.getLogger("paper_results")
 EXPERIMENTS = ("main", "ablation", "days", "pretrain")
 ABLATIONS = ("gnn", "gnn_no_attention", "gnn_linear_time")
-DAYS_METHODS = ("gnn", "fremen", "fremen_prior", "static_semantic", "markov")
+DAYS_METHODS = ("gnn", "fremen", "fremen_prior", "static_semantic", "markov", "analogs")
 DAY_COUNTS = (5, 10, 20, 30, 40)
 TABLE_WINDOWS = (HEADLINE_WINDOW_MIN, 40)
 
@@ -217,6 +220,11 @@ def per_query(records: dict, prefix: str) -> dict[str, dict[int, dict]]:
     return {m: {w: _mean_nested(v) for w, v in per.items()} for m, per in out.items()}
 
 
+def main_methods(records: dict) -> list[str]:
+    """The methods that have a main run, in first-seen order."""
+    return list(dict.fromkeys(k.split("/")[2] for k in records if k.startswith("main/")))
+
+
 def _mean_nested(rows: list[dict]) -> dict:
     return {g: {k: float(np.mean([r[g][k] for r in rows])) for k in rows[0][g]} for g in rows[0]}
 
@@ -235,8 +243,9 @@ def days_summary(records: dict, experiment: str, methods: tuple[str, ...], label
     return {m: {d: summarise(h) for d, h in sorted(per.items())} for m, per in out.items()}
 
 
-def write_outputs(records: dict, out: Path) -> dict:
-    """Every file that the finished runs allow; returns the 30-minute main table and the files written."""
+def write_outputs(records: dict, out: Path, dataset: str = "", table_path: Path | None = TABLE) -> dict:
+    """Every file that the finished runs allow; returns the 30-minute main table and the files written. The
+    validation table goes to `table_path` (None: not written) and, as markdown, to OUT."""
     files, main = [], {}
     methods_runs = {k: r for k, r in records.items() if k.split("/")[2] not in ABLATIONS[1:]}
     for window in TABLE_WINDOWS:
@@ -257,6 +266,13 @@ def write_outputs(records: dict, out: Path) -> dict:
                                              "| method | % used correct | % used wrong | % unused wrong |\n"
                                              "|---|---|---|---|\n" + "\n".join(rows) + "\n")
             files.append("ablation.md")
+        validation = validation_table(_complete(records, "main/", tuple(main_methods(records))), dataset,
+                                      HEADLINE_WINDOW_MIN)
+        (out / "validation_table.md").write_text(format_validation(validation))
+        files.append("validation_table.md")
+        if table_path is not None:
+            table_path.write_text(json.dumps(validation, indent=1) + "\n")
+            files.append(str(table_path))
     if any(k.startswith("days/") for k in records):
         files.append(days_curve(days_summary(records, "days", DAYS_METHODS), out / "days.png",
                                 "30-minute window, by training days").name)
@@ -296,7 +312,7 @@ def main() -> None:
     if not args.report:
         execute(dataset, runs, plan(dataset, experiments, households, args.methods.split(",")),
                 args.out / "checkpoints", backend_from_args(args))
-    json.dump(write_outputs(runs.records, args.out), sys.stdout, indent=1)
+    json.dump(write_outputs(runs.records, args.out, runs.dataset), sys.stdout, indent=1)
     sys.stdout.write("\n")
 
 

@@ -16,6 +16,7 @@ from homer_sim.errors import HomerError, unknown_name
 NONE, ON, INSIDE = 0, 1, 2
 RELATION_NAMES = ("NONE", "ON", "INSIDE")
 CATEGORIES = ("room", "furniture", "appliance", "prop", "decor", "object")
+OUTSIDE = "outside"  # the root beyond the front door (HOMER's name): what the person takes along when they go out
 
 
 class GraphError(HomerError):

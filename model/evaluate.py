@@ -64,22 +64,33 @@ def tune(predictor: Predictor, queries: Queries, steps: int, target: str = "pape
     target "paper": the highest objective among settings that move at most MAX_UNUSED_WRONG_PCT of the unused
     objects, or the highest objective overall if none does. target "f1": the highest mean relocation F1 over
     steps 1 .. `steps`. target "assist": the highest `Counts.assistance()`, the fetches made ahead minus the
-    wrong moves a robot acting on every gated prediction would make. The threshold only changes the decision rule
-    applied to a rollout, so one rollout per combination of the other tunables scores every threshold.
+    wrong moves a robot acting on every gated prediction would make. See `tune_targets`.
     """
+    return tune_targets(predictor, queries, steps, (target,))[target]
+
+
+def tune_targets(predictor: Predictor, queries: Queries, steps: int, targets: Sequence[str]
+                 ) -> dict[str, tuple[dict[str, float], float]]:
+    """`tune` for each of `targets` on the same queries: {target: (best params, its score)}; the predictor keeps
+    the last target's. The threshold only changes the decision rule applied to a rollout, so one rollout per
+    combination of the other tunables scores every threshold, for every target."""
     names = [k for k in predictor.grid if k != "threshold"]
     thresholds = predictor.grid.get("threshold", (predictor.params["threshold"],))
-    scored: list[tuple[bool, float, int, dict[str, float]]] = []
+    scored: dict[str, list[tuple[bool, float, int, dict[str, float]]]] = {t: [] for t in targets}
     for values in itertools.product(*(predictor.grid[k] for k in names)):
         predictor.set_params(**dict(zip(names, values, strict=True)))
         rollout = rollout_queries(predictor, queries, steps)
         for threshold in thresholds:
             predicted = gate(rollout, queries.observed, threshold)
             params = {**dict(zip(names, values, strict=True)), "threshold": float(threshold)}
-            scored.append((*_tuning_score(target, queries, predicted, steps, predictor.movable), -len(scored), params))
-    within, objective, _, best = max(scored, key=lambda row: row[:3])  # earliest in grid order wins ties
-    predictor.set_params(**best)
-    return dict(predictor.params), objective
+            for target, rows in scored.items():
+                rows.append((*_tuning_score(target, queries, predicted, steps, predictor.movable), -len(rows), params))
+    best = {}
+    for target, rows in scored.items():
+        _, objective, _, params = max(rows, key=lambda row: row[:3])  # earliest in grid order wins ties
+        best[target] = (params, objective)
+    predictor.set_params(**best[targets[-1]][0])
+    return {t: (dict(predictor.params) | p, v) for t, (p, v) in best.items()}
 
 
 def _tuning_score(target: str, queries: Queries, predicted: np.ndarray, steps: int, movable: np.ndarray
@@ -129,25 +140,23 @@ def tuning_key(target: str, window_min: int) -> str:
     return "f1" if target == "f1" else f"{target}@{window_min}"
 
 
-def fit_and_tune(spec: FitSpec, meta: DatasetMeta, window_min: int, target: str = "paper",
+def fit_and_tune(spec: FitSpec, meta: DatasetMeta, window_min: int, target: str | Sequence[str] = "paper",
                  cached: tuple[Predictor, dict] | None = None, init_state: dict[str, np.ndarray] | None = None,
                  progress: bool = True) -> tuple[Predictor, dict, bool]:
-    """Fit `spec` (or take the `cached` predictor and its info) and tune it for `target` unless it already was;
-    reads and writes no file. init_state: pre-trained weights to start from. Returns the predictor, its
-    provenance (days, training report, tunings and their validation scores) and whether it is new or newly tuned.
+    """Fit `spec` (or take the `cached` predictor and its info) and tune it for `target` (or each of several)
+    unless it already was; reads and writes no file. init_state: pre-trained weights to start from. Returns the
+    predictor with the (last) target's params, its provenance (days, training report, tunings and their validation
+    scores) and whether it is new or newly tuned.
 
-    target "paper" and "assist" tune at `window_min`, "f1" for SLaTe-PRO's F1 over 10 .. 60 minutes (window_min
-    unused).
+    target "paper" and "assist" tune at `window_min` (together: one rollout per setting serves both), "f1" for
+    SLaTe-PRO's F1 over 10 .. 60 minutes (window_min unused).
     """
-    key = tuning_key(target, window_min)
-    steps = F1_STEPS if target == "f1" else window_steps(window_min, meta.grid_min)
+    targets = (target,) if isinstance(target, str) else tuple(target)
+    keys = {t: tuning_key(t, window_min) for t in targets}
     tunings: dict = {}
     if cached is not None:
         predictor, info = cached
         tunings = info.get("tunings", {}) if info.get("tuning_version") == TUNING_VERSION else {}
-        if key in tunings:
-            predictor.set_params(**tunings[key]["params"])
-            return predictor, info, False
     else:
         predictor = make_predictor(spec.method, meta, progress=progress, **dict(spec.config))
         if init_state is not None:
@@ -157,18 +166,28 @@ def fit_and_tune(spec: FitSpec, meta: DatasetMeta, window_min: int, target: str 
         report = getattr(predictor, "report", None)
         if report is not None:
             info.update(epochs=report.epochs, best_epoch=report.best_epoch, train_s=round(report.wall_s, 2))
-    params, val_score = tune(predictor, day_queries(spec.val_days, steps), steps, target)
-    log.info("%s tuned for %s: %s (validation score %.4f)", spec.method, key, params, val_score)
-    tunings = {**tunings, key: {"params": params, "val_score": round(val_score, 4)}}
-    return predictor, {**info, "tuning_version": TUNING_VERSION, "tunings": tunings}, True
+    missing = [t for t in targets if keys[t] not in tunings]
+    for steps in dict.fromkeys(_tuning_steps(t, window_min, meta.grid_min) for t in missing):
+        group = [t for t in missing if _tuning_steps(t, window_min, meta.grid_min) == steps]
+        for t, (params, val_score) in tune_targets(predictor, day_queries(spec.val_days, steps), steps, group).items():
+            log.info("%s tuned for %s: %s (validation score %.4f)", spec.method, keys[t], params, val_score)
+            tunings = {**tunings, keys[t]: {"params": params, "val_score": round(val_score, 4)}}
+    predictor.set_params(**tunings[keys[targets[-1]]]["params"])
+    fresh = cached is None or bool(missing)
+    return predictor, {**info, "tuning_version": TUNING_VERSION, "tunings": tunings} if fresh else info, fresh
+
+
+def _tuning_steps(target: str, window_min: int, grid_min: int) -> int:
+    return F1_STEPS if target == "f1" else window_steps(window_min, grid_min)
 
 
 def fit_tuned(spec: FitSpec, meta: DatasetMeta, window_min: int, path: Path | None = None,
-              progress: bool = True, target: str = "paper") -> tuple[Predictor, dict]:
-    """Load the cached predictor at `path` or fit one; tune it for `target` unless the cache already was (see
-    `fit_and_tune`), and write the checkpoint when it changed. Every tuning of one fit is kept in the
-    checkpoint's info["tunings"]."""
-    result = run_fit(None, fit_task(spec.method, spec, meta, window_min, path, (target,), progress=progress))
+              progress: bool = True, target: str | Sequence[str] = "paper") -> tuple[Predictor, dict]:
+    """Load the cached predictor at `path` or fit one; tune it for `target` (or each of several in turn; the
+    predictor keeps the last one's params) unless the cache already was (see `fit_and_tune`), and write the
+    checkpoint when it changed. Every tuning of one fit is kept in the checkpoint's info["tunings"]."""
+    targets = (target,) if isinstance(target, str) else tuple(target)
+    result = run_fit(None, fit_task(spec.method, spec, meta, window_min, path, targets, progress=progress))
     result.save()
     return result.predictor, result.info
 
@@ -224,15 +243,14 @@ def fit_task(key: str, spec: FitSpec, meta: DatasetMeta, window_min: int, path: 
 
 def run_fit(_: None, task: FitTask) -> FitResult:
     """Fit, tune and score a FitTask; writes nothing (the task function of `homer_sim.execution`, no state)."""
-    started, current, changed, scores = time.perf_counter(), task.cached, False, {}
+    started, scores = time.perf_counter(), {}
+    predictor, info, changed = fit_and_tune(task.spec, task.meta, task.window_min, task.targets, task.cached,
+                                            task.init_state, task.progress)
     for target in task.targets:
-        predictor, info, fresh = fit_and_tune(task.spec, task.meta, task.window_min, target, current,
-                                              task.init_state, task.progress)
-        current, changed = (predictor, info), changed or fresh
+        predictor.set_params(**info["tunings"][tuning_key(target, task.window_min)]["params"])
         if task.scorer is not None:
             scores.update(task.scorer(predictor, target))
-    assert current is not None, "a FitTask has at least one target"
-    return FitResult(task.key, task.checkpoint, *current, changed, scores, time.perf_counter() - started)
+    return FitResult(task.key, task.checkpoint, predictor, info, changed, scores, time.perf_counter() - started)
 
 
 def used_objects(days: Sequence[Day]) -> np.ndarray:

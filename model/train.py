@@ -109,6 +109,8 @@ def train(model: ObjectGraphNet, fit: Transitions, val: Transitions, progress: b
         val_loss = mean_loss(model, val)
         history.append((total / len(fit), val_loss))
         bar.set_postfix(train=f"{history[-1][0]:.4f}", val=f"{val_loss:.4f}")
+        log.info("epoch %d of at most %d: train loss %.5f, validation loss %.5f (%.0f s so far)", epoch,
+                 config.max_epochs, history[-1][0], val_loss, time.perf_counter() - started)
         if val_loss < best_loss:
             best_loss, best_epoch, best_state = val_loss, epoch, copy.deepcopy(model.state_dict())
         elif epoch - best_epoch >= config.patience:

@@ -25,7 +25,8 @@ from planners.motion.control import FREE_MOTION
 from planners.motion.navigation import IN_THE_WAY, NavigationError
 from planners.robot import DEFAULT_POSE
 from planners.skills import Robot, SkillResult
-from scenarios.psi import PlanStep, Relocation, plan_steps
+from planners.skills.parts import parts_to_open
+from scenarios.psi import PlanStep, Relocation, anchor_of, plan_steps
 
 log = logging.getLogger(__name__)
 
@@ -104,7 +105,8 @@ class Helper:
         self.waiting = []
         if not relocations:
             return float(minute)
-        steps = plan_steps(graph, movable, relocations, self.containers, self.open_containers())
+        steps = self._needed(plan_steps(graph, movable, relocations, self.containers, self.open_containers()),
+                             relocations, graph, movable)
         before = self.world.object_positions()
         started = float(self.world.data.time)
         self._carry_out(steps, relocations, minute, started)
@@ -122,6 +124,17 @@ class Helper:
     def open_containers(self) -> set[str]:
         """Containers with a door or drawer open more than a tenth."""
         return {f for f, parts in self.containers.items() if any(self.world.openness(p) > 0.1 for p in parts)}
+
+    def _needed(self, steps: Sequence[PlanStep], relocations: Sequence[Relocation], graph: SceneGraph,
+                movable: np.ndarray) -> tuple[PlanStep, ...]:
+        """`steps` without the opening and closing of parts no relocation needs: of the furniture an object is
+        taken from, only the drawer it lies in (`parts_to_open`); the destination's parts all stay."""
+        needed: set[str] = set()
+        for r in relocations:
+            source = self.containers.get(anchor_of(graph, movable, r.source), ())
+            needed.update(parts_to_open(self.world, graph, list(source), r.obj))
+            needed.update(self.containers.get(r.destination, ()))
+        return tuple(s for s in steps if s.action not in ("open", "close") or s.target in needed)
 
     # --- acting ---------------------------------------------------------------------------------------------
     def _carry_out(self, steps: Sequence[PlanStep], relocations: Sequence[Relocation], minute: int,

@@ -1,7 +1,9 @@
 """`homer assist-eval`: the assisted day on every test day of every household of a dataset, measured end to end.
 
-Per household, the predictor is fitted on the dataset's training days and tuned on their last tenth, cached as
-`homer evaluate` caches it (`model.evaluate.fit_tuned`); method `oracle` instead predicts from the unassisted
+Per household, the predictor (by default the best validated method of `model.selection`'s table) is fitted on the
+dataset's training days and tuned on their last tenth, its threshold for the assistance objective (the paper's
+reported beside it), cached as `homer evaluate` caches it (`scenarios.predictors.predictor_for`); method `oracle`
+instead predicts from the unassisted
 replay of the same day (perfect prediction: what is left is manipulation). Each test day is one episode of the
 assisted-day environment (`scenarios.env`) run by Psi, a task of `homer_sim.execution` (local or Ray); a day's
 robot draws its random stream from (seed, household, day), so the figures do not depend on the number of workers.
@@ -17,7 +19,7 @@ import statistics
 import time
 from collections import Counter
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -28,8 +30,10 @@ from homer_sim.data.dataset import Dataset
 from homer_sim.data.generate import Generator, Sources
 from homer_sim.errors import HomerError, unknown_name
 from homer_sim.execution import IN_PROCESS, Backend
-from scenarios.episodes import dataset_day_plan, predictor_for
+from model.selection import default_method
+from scenarios.episodes import dataset_day_plan
 from scenarios.policies import OraclePredictor, PsiPolicy
+from scenarios.predictors import TUNINGS, predictor_for, thresholds
 from scenarios.scoring import day_result
 from scenarios.task import AssistEnv, AssistTask, play
 
@@ -47,7 +51,7 @@ class EvalSpec:
     the whole day)."""
 
     data: str
-    method: str = "markov"
+    method: str = field(default_factory=default_method)
     seed: int = 0
     window_min: int = DEFAULT_WINDOW_MIN
     checkpoints: str | None = None
@@ -96,7 +100,7 @@ class DayRunner:
             return OraclePredictor(task.reference, task.scene.movable)
         if household not in self.predictors:
             self.predictors[household] = predictor_for(self.dataset, household, self.spec.method,
-                                                      self.spec.window_min, self.spec.checkpoint_folder())
+                                                      self.spec.window_min, self.spec.checkpoint_folder())[0]
         return self.predictors[household]
 
 
@@ -120,12 +124,14 @@ def assist_eval(spec: EvalSpec, households: Sequence[str] | None = None, days: i
     for name in names:
         if name not in dataset.meta.households:
             raise unknown_name("household", name, dataset.meta.households)
+    tuned: dict[str, dict[str, float]] = {}
     if spec.method != ORACLE:
         from model.methods import check_method
 
         check_method(spec.method)
         for name in names:  # fit once here, not in every worker
-            predictor_for(dataset, name, spec.method, spec.window_min, spec.checkpoint_folder(), progress)
+            info = predictor_for(dataset, name, spec.method, spec.window_min, spec.checkpoint_folder(), progress)[1]
+            tuned[name] = thresholds(info, spec.window_min)
     out = Path(out) if out else spec.checkpoint_folder() / f"assist_eval_{spec.method}_{spec.key()}"
     cached = _cached_days(out, spec)
     tasks = [(name, i) for name in names for i in range(_test_days(dataset, name, days))]
@@ -144,6 +150,7 @@ def assist_eval(spec: EvalSpec, households: Sequence[str] | None = None, days: i
             bar.update()
     bar.close()
     summary = summarise(spec.method, [cached[t] for t in tasks], names)
+    summary["thresholds"] = tuned
     _write_json(out / "assist_eval.json", summary)
     (out / "assist_eval.md").write_text(markdown_table(summary))
     plot(summary, out / "assist_eval.png")
@@ -161,7 +168,7 @@ def _test_days(dataset: Dataset, household: str, days: int | None) -> int:
 def _cached_days(out: Path, spec: EvalSpec) -> dict[tuple[str, int], dict]:
     """Day results of an earlier run of the same spec and package version in `out` (a folder of another one is
     refused: its days were lived by other code or settings)."""
-    setting = {"spec": asdict(spec), "homer_sim": __version__}
+    setting = {"spec": asdict(spec), "homer_sim": __version__, "robot_threshold": f"tuned for {TUNINGS[-1]}"}
     spec_path = out / "spec.json"
     if spec_path.is_file() and json.loads(spec_path.read_text()) != setting:
         raise HomerError(f"{out} holds an assist-eval of another setting ({spec_path.read_text()}); use another --out")
@@ -206,13 +213,23 @@ def summarise(method: str, results: Sequence[dict], households: Sequence[str]) -
 def markdown_table(summary: dict) -> str:
     """The per-household table and the failure causes, in markdown."""
     columns = ("days", *COUNTS, "fetch_share", "robot_minutes", "wall_s_per_day")
-    lines = [f"method: {summary['method']}", "", "| household | " + " | ".join(columns) + " |",
+    lines = [f"method: {summary['method']}", *threshold_lines(summary.get("thresholds", {})), "",
+             "| household | " + " | ".join(columns) + " |",
              "|---" * (len(columns) + 1) + "|"]
     rows = [*summary["per_household"].items(), ("total", summary["total"])]
     lines += [f"| {name} | " + " | ".join(str(row[c]) for c in columns) + " |" for name, row in rows]
     lines += ["", "| failure cause | relocations |", "|---|---|"]
     lines += [f"| {cause} | {n} |" for cause, n in summary["failures"].items()] or ["| (none) | 0 |"]
     return "\n".join(lines) + "\n"
+
+
+def threshold_lines(tuned: dict[str, dict[str, float]]) -> list[str]:
+    """The thresholds per household: the robot's (tuned for the assistance objective) and the paper's."""
+    if not tuned:
+        return []
+    return ["", "thresholds tuned on validation days (the robot acts on the assistance one):", "",
+            "| household | assistance | paper |", "|---|---|---|",
+            *(f"| {h} | {t['assist']:.2f} | {t['paper']:.2f} |" for h, t in tuned.items())]
 
 
 def plot(summary: dict, path: Path) -> None:

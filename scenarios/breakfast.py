@@ -19,6 +19,7 @@ from homer_sim.person.executor import DayLog
 from scenarios.assist import AssistLog
 from scenarios.breakfast_data import DataSpec, check_meta, ensure_dataset, ensure_predictor, make_generator
 from scenarios.policies import PsiPolicy
+from scenarios.predictors import method_source, thresholds
 from scenarios.scoring import day_result
 from scenarios.task import AssistEnv, AssistTask, DayPlan, run_episode
 
@@ -26,7 +27,7 @@ log = logging.getLogger(__name__)
 
 MORNING_END_MIN = 510  # 08:30: breakfast starts at 07:00 and is cleared away by about 07:50
 DEMO_DAY = ("test", 0)
-FULL_DAY_TRAIN_DAYS = 20  # a full assisted day's household: days to fit its predictor on (about 2 s each)
+FULL_DAY_TRAIN_DAYS = 50  # a full assisted day's household: training days, as in the paper setup (about 1 s each)
 
 
 @dataclass(frozen=True)
@@ -63,11 +64,12 @@ def run_full_day(rrd: Path | None, household: str) -> dict:
 
 @dataclass(frozen=True)
 class MorningSetup:
-    """The assisted-day environment of a morning, the predictor fitted for its household, and the wall seconds
-    of making them (dataset, predictor)."""
+    """The assisted-day environment of a morning, the predictor fitted for its household and its checkpoint info
+    (tunings), and the wall seconds of making them (dataset, predictor)."""
 
     env: AssistEnv
     predictor: object
+    info: dict
     nodes: tuple[str, ...]
     stages_s: dict[str, float]
 
@@ -81,12 +83,12 @@ def morning_setup(morning: Morning = Morning(), spec: DataSpec | None = None, re
     dataset, generated_s = ensure_dataset(generator, spec)
     check_meta(dataset.meta, generator.world.layout.node_names())
     stages = {"dataset (cached)" if generated_s == 0 else "dataset (generated)": time.perf_counter() - started}
-    predictor, trained_s = ensure_predictor(dataset, spec)
+    predictor, info, trained_s = ensure_predictor(dataset, spec)
     stages["predictor (cached)" if trained_s == 0 else "predictor (trained)"] = (
         time.perf_counter() - started - sum(stages.values()))
     env = AssistEnv(AssistTask([morning_plan(dataset, morning, spec)], seed=spec.seed,
                                window_min=spec.window_min, reference=generator, recording=recording))
-    return MorningSetup(env, predictor, dataset.meta.nodes, {k: round(v, 2) for k, v in stages.items()})
+    return MorningSetup(env, predictor, info, dataset.meta.nodes, {k: round(v, 2) for k, v in stages.items()})
 
 
 def assisted_run(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec | None = None) -> MorningRun:
@@ -116,7 +118,9 @@ def assisted_run(rrd: Path | None, morning: Morning = Morning(), spec: DataSpec 
                         until=morning.end_min)
     result.update({"rrd": str(rrd) if rrd is not None else None, "household": spec.household,
                    "day": f"{morning.split}/{morning.index}", "schedule": [list(e) for e in env.task.day.entries],
-                   "method": spec.method, "threshold": policy.threshold, "window_min": spec.window_min,
+                   "method": setup.predictor.method, "method_from": method_source(spec.method),
+                   "threshold": policy.threshold, "thresholds": thresholds(setup.info, spec.window_min),
+                   "window_min": spec.window_min,
                    "return": episode_return, "stages_s": stages})
     return MorningRun(result, assist, reference, setup.nodes)
 
@@ -132,7 +136,9 @@ def format_summary(result: dict) -> list[str]:
     """Human-readable lines of a `run_breakfast` result."""
     lines = [f"{result['household']} {result['day']}: " + (", ".join(
         f"{a} {clock_text(s)}-{clock_text(e)}" for a, s, e in result["schedule"]) or "no breakfast today"),
-        f"predictor {result['method']} (threshold {result['threshold']:.2f}), window {result['window_min']} min"]
+        f"predictor {result['method']} ({result['method_from']}), threshold {result['threshold']:.2f} (tuned on "
+        f"validation days for the assistance objective; {result['thresholds']['paper']:.2f} for the paper's), window "
+        f"{result['window_min']} min"]
     for r in result["relocations"]:
         status = "done" if r["done"] else f"FAILED: {r['reason']}"
         verdict = "correct" if r["correct"] else f"person would have moved it to {r['person_unassisted']}"

@@ -40,12 +40,13 @@ CACHE_ENV = "HOMER_SIM_CACHE"
 
 @dataclass(frozen=True)
 class DataSpec:
-    """What the demo's dataset and predictor are: days per split, seed, method, window (min), household."""
+    """What the demo's dataset and predictor are: days per split, seed, method (None: the best validated one),
+    window (min), household."""
 
     train_days: int = 16
     test_days: int = 2
     seed: int = 0
-    method: str = "markov"  # the graph network trains at ~50 s per epoch on 2 shared cores: too slow for a demo
+    method: str | None = None  # None: the best validated method of the validation table (model.selection)
     window_min: int = DEFAULT_WINDOW_MIN
     household: str = HOUSEHOLD  # or one of the project's households (a full assisted day)
 
@@ -164,18 +165,16 @@ def ensure_dataset(generator, spec: DataSpec) -> tuple[Dataset, float]:
 
 
 def ensure_predictor(dataset: Dataset, spec: DataSpec, progress: bool = False):
-    """The predictor fitted and tuned on the training days (cached checkpoint); returns it and wall seconds
-    spent fitting (0 when cached)."""
-    from model.evaluate import FitSpec, fit_tuned, split_days  # torch: imported when a predictor is needed
+    """The predictor fitted and tuned on the training days (cached checkpoint, `scenarios.predictors.predictor_for`:
+    the best validated method unless spec.method names one, the robot's threshold tuned for the assistance
+    objective); returns it, its checkpoint info and the wall seconds spent fitting or tuning (0 when cached)."""
+    from scenarios.predictors import predictor_for  # torch: imported when a predictor is needed
 
-    fit, val = split_days(dataset.load(spec.household, "train"))
-    fit_spec = FitSpec(spec.method, tuple(fit), tuple(val))
-    path = fit_spec.path(dataset.root / "checkpoints", spec.household)
-    cached = path.is_file()
     started = time.perf_counter()
-    predictor, info = fit_tuned(fit_spec, dataset.meta, spec.window_min, path, progress=progress)
-    log.info("predictor %s: %s", spec.method, info)
-    return predictor, 0.0 if cached else time.perf_counter() - started
+    fitted = predictor_for(dataset, spec.household, spec.method, spec.window_min, dataset.root / "checkpoints",
+                           progress)
+    log.info("predictor %s: %s", fitted.predictor.method, fitted.info)
+    return fitted.predictor, fitted.info, time.perf_counter() - started if fitted.fresh else 0.0
 
 
 def check_meta(meta: DatasetMeta, nodes: tuple[str, ...]) -> None:

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from homer_sim.clock import DEFAULT_WINDOW_MIN
 from homer_sim.errors import unknown_name
+from scenarios.predictors import predictor_for
 from scenarios.registry import FULL_DAY_HOUSEHOLDS
 from scenarios.task import AssistEnv, AssistTask, DayPlan
 
@@ -31,18 +32,6 @@ def dataset_day_plan(dataset, household: str, index: int, split: str = "test", e
     key = day.replay_key()
     seed = None if robot_seed is None else (robot_seed, key.household, index)
     return DayPlan(household, key, tuple(tuple(e) for e in day.schedule), end_min, robot_seed=seed)
-
-
-def predictor_for(dataset, household: str, method: str, window_min: int, checkpoints: Path,
-                  progress: bool = False):
-    """The household's predictor fitted on its training days and tuned on their last tenth at `window_min`, cached
-    under `checkpoints` as `homer evaluate` caches it (fitted on the first call, loaded after)."""
-    from model.evaluate import FitSpec, fit_tuned, household_split
-
-    fit, val, _, _ = household_split(dataset, household, None)
-    spec = FitSpec(method, tuple(fit), tuple(val))
-    predictor, _ = fit_tuned(spec, dataset.meta, window_min, spec.path(Path(checkpoints), household), progress)
-    return predictor
 
 
 def _breakfast(skip_breakfast: bool = False, **options) -> Setup:
@@ -76,7 +65,7 @@ def _dataset_day(data: str, household: str, index: int = 0, split: str = "test",
     plan = dataset_day_plan(dataset, household, index, split, end_min, seed)
     env = AssistEnv(AssistTask([plan], window_min=window_min, reference=generator, recording=recording))
     folder = Path(checkpoints) if checkpoints else Path(data) / "checkpoints"
-    return Setup(env, predictor_for(dataset, household, method, window_min, folder) if method else None)
+    return Setup(env, predictor_for(dataset, household, method, window_min, folder)[0] if method else None)
 
 
 ENVIRONMENTS: dict[str, Callable[..., Setup]] = {

@@ -27,8 +27,6 @@ from scenarios.task import NO_RELOCATION, SceneInfo
 log = logging.getLogger(__name__)
 
 PERSON_REACH = 0.7  # m from a furniture's footprint within which the person counts as using it
-ROBOT_MIN_THRESHOLD = 0.5  # the robot acts on a move only when it is more likely than staying: robot time costs
-# routine minutes and a wrong move is worse than a missed one (the tuned threshold may be lower)
 
 
 def furniture_near(layout: Layout, x: float, y: float, reach: float = PERSON_REACH) -> list[str]:
@@ -91,7 +89,10 @@ class RandomPolicy:
 
 
 class PsiPolicy:
-    """The paper's robot as a policy: predict, plan with Psi, remember the help it gave (see the module doc)."""
+    """The paper's robot as a policy: predict, plan with Psi, remember the help it gave (see the module doc).
+
+    threshold: the confidence a predicted move needs (default: the predictor's own, which
+    `scenarios.predictors.predictor_for` tunes on validation days for the assistance objective)."""
 
     def __init__(self, scene: SceneInfo, predictor, window_min: int = DEFAULT_WINDOW_MIN,
                  threshold: float | None = None, recording=None) -> None:
@@ -99,8 +100,7 @@ class PsiPolicy:
         self.predictor = predictor
         self.window_min = window_min
         self.window_steps = window_min // GRID_MIN
-        tuned = max(float(predictor.params["threshold"]), ROBOT_MIN_THRESHOLD)
-        self.threshold = tuned if threshold is None else float(threshold)
+        self.threshold = float(predictor.params["threshold"]) if threshold is None else float(threshold)
         self.recording = recording
         self.reset()
 

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from homer_sim.graph import SceneGraph
+from homer_sim.graph import OUTSIDE, SceneGraph
 from model.metrics import first_change, gate
 from model.predictor import Rollout
 
@@ -263,7 +263,8 @@ def psi(graph: SceneGraph, movable: np.ndarray, rollout: Rollout, *, threshold: 
 
     carried: objects in the person's hand. excluded: object name -> why the robot cannot grasp it (None if it can).
     holds: objects the robot placed and keeps for the person. in_use: furniture the person is at now; nothing is
-    taken from it or put on it while they are there (the robot does not clear a table the person eats at). Moves
+    taken from it or put on it while they are there (the robot does not clear a table the person eats at); nothing
+    is taken to or from `outside` (the robot stays in the apartment). Moves
     that do not reach the threshold are reported among the skipped ones. returns: relocations made whatever the
     prediction (`unused_help`); they replace the predicted moves of their objects.
     """
@@ -277,6 +278,8 @@ def psi(graph: SceneGraph, movable: np.ndarray, rollout: Rollout, *, threshold: 
             return "in the person's hand"
         held = holds.reason(r.obj) if holds is not None else None
         busy = [n for n in (anchor_of(graph, movable, r.source), r.destination) if n in in_use]
+        if OUTSIDE in (graph.room_of(r.source), graph.room_of(r.destination)):
+            return "outside the apartment (the robot stays in; the person takes what they need along)"
         return held or (f"the person is at {busy[0]}" if busy else None) or excluded(r.obj)
 
     plan = plan_relocations(graph, movable, passed, containers, skip, already_open)

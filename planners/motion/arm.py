@@ -27,6 +27,8 @@ CARRY_REACHES = (0.35, 0.45, 0.55)  # m from the base centre to the carry point,
 # for a hand held level only, see `Arm.carry_path`)
 LEVEL_HAND = 0.7  # horizontal part of the grip x axis above which the hand counts as held level
 CARRY_HEIGHT = 1.05  # m
+CARRY_ARM_SPEED = 0.2  # peak joint speed (fraction of the limit) moving a held object to the carry point: a wine
+# glass pinched at its rim slipped out of the fingers at SPEED_FRACTION
 CARRY_STEP = 0.05  # m between IK waypoints on the way to the carry point
 TURN_STEP = 0.15  # rad the hand turns at most between IK waypoints of a move between poses
 RAISED_SHOULDER = -1.0  # rad: upper arm raised above the tuck
@@ -288,9 +290,10 @@ class Arm:
         return path
 
     def carry(self) -> np.ndarray:
-        """Move the held object to the carry point along `carry_path`; returns the posture there (shape (13,))."""
+        """Move the held object to the carry point along `carry_path`, at CARRY_ARM_SPEED; returns the posture there
+        (shape (13,))."""
         path = self.carry_path()
-        self.controller.move_through(path)
+        self.controller.move_through(path, speed=CARRY_ARM_SPEED)
         return path[-1]
 
     def carry_path(self) -> list[np.ndarray]:

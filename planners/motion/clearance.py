@@ -12,6 +12,7 @@ import numpy as np
 from planners.motion.control import robot_geom_ids
 from planners.robot import FINGER_GEOMS, PREFIX
 
+FINGER_GRAZE = 0.002  # m: an open finger may graze a neighbour's edge this deep (it slides off)
 ARC_BASE_COST = 1e4  # IK damping on the base: the base is placed by the planner, the arm reaches
 
 
@@ -39,7 +40,6 @@ class ClearanceCheck:
     """
 
     MARGIN = 0.005  # m
-    FINGER_GRAZE = 0.002  # m: an open finger may graze a neighbour's edge this deep (it slides off)
 
     def __init__(self, world, controller) -> None:
         self.world = world
@@ -64,9 +64,9 @@ class ClearanceCheck:
         FINGER_GRAZE m aside)."""
         return not self.finger_contacts(q)
 
-    def finger_contacts(self, q: np.ndarray) -> set[int]:
+    def finger_contacts(self, q: np.ndarray, graze: float = FINGER_GRAZE) -> set[int]:
         """Ids of the geoms outside the robot that the fingers at configuration q (shape (13,), the finger
-        openings included) touch deeper than FINGER_GRAZE m."""
+        openings included) touch deeper than `graze` m."""
         d = self.scratch
         d.qpos[:] = self.world.data.qpos
         d.qpos[self.qpos_adr] = q
@@ -74,7 +74,7 @@ class ClearanceCheck:
         mujoco.mj_collision(self.model, d)
         g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
         touching = ((self.fingers[g1] != self.fingers[g2]) & ~(self.robot[g1] & self.robot[g2])
-                    & (d.contact.dist[: d.ncon] < -self.FINGER_GRAZE))
+                    & (d.contact.dist[: d.ncon] < -graze))
         return {int(g) for g in np.concatenate([g1[touching], g2[touching]]) if not self.robot[g]}
 
     def clear(self, q: np.ndarray, articulation=None, value: float = 0.0, held: Held | None = None,

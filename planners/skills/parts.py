@@ -22,7 +22,7 @@ from enum import Enum
 
 import numpy as np
 
-from homer_sim.graph import INSIDE
+from homer_sim.graph import INSIDE, ON, RELATION_NAMES
 from homer_sim.home.furniture import Furniture, furniture_geometry
 from homer_sim.home.spots import Spots
 from planners.grasps.geometry import axis_rotation, matrix_to_quat
@@ -40,6 +40,7 @@ HANDLE_OFFSET = 0.004  # m: grip site this far outward of the bar centre (finger
 EDGE_INSET = 0.025  # m from the free edge to the grip site
 EDGE_ABOVE_HANDLE = 0.15  # m: the edge is held this far above the handle
 PRE_OPENING = 0.03  # m per finger before closing on a 2 cm bar or panel
+COVERED = 0.5  # share of a place's area under a higher place of the same furniture above which it is a shelf
 MIN_HELD = 0.004  # m per finger: closed further means the fingers missed the 2 cm bar
 SLIP = 0.03  # m between the grip site and the grasp point on the part before a motion is aborted
 BASE_CLEARANCE = 0.05  # m between the base and the moving part
@@ -175,3 +176,37 @@ def shelves_inside(spots: Spots, furniture: Furniture | None, node: str, relatio
     if furniture is None or not behind_a_door(furniture):
         return []
     return [k for k, p in spots.places_of(node, relation) if p.relation == INSIDE and p.part is None]
+
+
+def covered_places(spots: Spots, node: str, relation: int | None) -> list[int]:
+    """Indices of the fixed places of furniture `node` that a place with `relation` goes to and that lie under
+    another fixed place of it covering most of their area (an open shelf's lower levels; not a shower's floor
+    under its small soap shelf): a hand coming down from above meets the level above, so they are reached from
+    the front, as shelves."""
+    fixed = [p for relation_ in (ON, INSIDE) for _, p in spots.places_of(node, relation_) if p.part is None]
+    return [k for k, p in spots.places_of(node, relation) if p.part is None and any(
+        q.center[2] > p.center[2] and _overlap(q, p) > COVERED * 4.0 * p.half_xy[0] * p.half_xy[1] for q in fixed)]
+
+
+def _overlap(a, b) -> float:
+    """The area (m^2) two places' rectangles (furniture frame) share."""
+    return math.prod(max(0.0, min(a.center[i] + a.half_xy[i], b.center[i] + b.half_xy[i])
+                         - max(a.center[i] - a.half_xy[i], b.center[i] - b.half_xy[i])) for i in (0, 1))
+
+
+def parts_to_open(world, graph, parts, obj: str) -> list[str]:
+    """Of a piece of furniture's `parts` (doors or drawers, `<furniture>/<part>`) those to open to take `obj` out
+    of it (`graph`: the observed scene graph): every door (a door covers every shelf behind it) and, of drawers,
+    the one it lies in (the highest whose body is below it) if it (or what it rests on) is INSIDE, none if it is
+    on the top. A drawer left open below or above another keeps the robot from reaching the other's handle as it
+    closes."""
+    movable = set(world.object_names)
+    holder = obj
+    while graph.parent_of(holder) in movable:
+        holder = graph.parent_of(holder)
+    inside = graph.relation_of(holder) == RELATION_NAMES[INSIDE]
+    drawers = [p for p in parts if world.articulations[p].joint_type == "slide"]
+    z = world.object_pose(obj)[0][2]
+    height = {p: world.data.xpos[world.model.body(p).id][2] for p in drawers}
+    lying_in = max((p for p in drawers if height[p] < z), key=height.get, default=None)
+    return [p for p in parts if p not in drawers or (inside and p == lying_in)]

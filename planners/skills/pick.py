@@ -45,6 +45,9 @@ SIDE_PULL = 0.35  # m: then draws it this far out of the furniture,
 SIDE_RAISE = 0.13  # m: then raises it this much more
 OPEN_ABOVE = 0.5  # m of free height above a place below which a grasp from above does not fit
 CLOSING_STEP = 0.005  # m per finger between the openings at which the fingers' way as they close is checked
+NEIGHBOUR_PUSH = 0.005  # m an open finger coming down onto a grasp may press into a neighbour (it slides it a
+# little aside; a side grasp of a glass grazed the wine glass beside it 3 mm, a roll's finger sank 12 mm into the
+# perfume it came down on)
 DESCENT_DRIFT = 0.005  # m a loose waypoint of the descent onto a grasp may stray from the line (see `_descent`)
 
 
@@ -207,6 +210,22 @@ class Pick:
                 return False
         return True
 
+    def _neighbours_struck(self, name: str, path: list[np.ndarray], opening: float) -> list[str]:
+        """The objects other than `name` that the fingers, open `opening` m per finger, touch deeper than
+        NEIGHBOUR_PUSH m along the descent `path` (configurations, each shape (13,)) onto a grasp: they would push
+        them over or rest on them (a toilet roll's shelf grasp came down on the perfume beside it and the roll fell
+        out)."""
+        n_body = self.controller.n_body
+        model = self.world.model
+        bodies = {int(b): n for n, b in zip(self.world.object_names, self.world.object_body_ids, strict=True)}
+        struck: set[str] = set()
+        for q in path:
+            q = q.copy()
+            q[n_body:] = opening
+            touched = {int(model.geom_bodyid[g]) for g in self.clearance.finger_contacts(q, NEIGHBOUR_PUSH)}
+            struck |= {bodies[b] for b in touched if b in bodies}
+        return sorted(struck - {name})
+
     def _pick_from_shelf(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
                          out: np.ndarray | None = None, replan: bool = True) -> SkillResult:
         """Pick `name` from a shelf inside cabinet `node`: each grasp of `shelf_grasps` in turn, from a base
@@ -284,6 +303,9 @@ class Pick:
         planned = self._descent(above, grasp.position, quat, seed=path_in[-1])  # nothing moved yet
         if planned is not None and not self._closing_clear(planned[-1], grasp.pre_opening):
             return SkillResult(False, "a closing finger would strike something other than the object")
+        struck = None if planned is None else self._neighbours_struck(name, planned, grasp.pre_opening)
+        if struck:
+            return SkillResult(False, f"an open finger would come down on {', '.join(struck)}")
         self.arm.reach(path_in[0], grip=grasp.pre_opening)
         if len(path_in) > 1:
             self.controller.move_through(path_in[1:], grip=grasp.pre_opening)

@@ -8,6 +8,7 @@ out. Success is read back from the observed scene graph. Movement comes from `pl
 from __future__ import annotations
 
 import math
+from itertools import islice
 
 import numpy as np
 
@@ -21,16 +22,21 @@ from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, SIDE_LIFT, Arm
 from planners.motion.clearance import ARC_BASE_COST, Held
 from planners.motion.control import CARRY_MOTION
 from planners.motion.navigation import CLEARANCE, NavigationError, base_candidates
-from planners.skills.parts import shelves_inside
+from planners.skills.parts import covered_places, shelves_inside
 from planners.skills.result import SkillResult
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 CARRY_SLIP = 0.03  # m the held object may shift in the hand while carried before a place gives up
+TOP_SPOTS = 4  # free spots on an open top tried for a place (the first one no way down is blocked to),
+TOP_SPOT_GAP = 0.08  # m apart at least,
+SPOT_DRAWS = 40  # from this many free spots of each place drawn in turn
+STOPPED_ABOVE = 0.02  # m above its spot a lowered object may stop before it counts as stopped on something
 SHELF_SPOTS = 6  # free spots tried for a place inside, nearest the front first, then half as many on each other
 # shelf (rack),
 SHELF_SPOT_GAP = 0.05  # m apart at least
 EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
 RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to let go (inside a shelf)
+TOP_RELEASE_OPENING = 0.05  # m per finger the fingers open at least to let go on an open top
 
 
 class Place:
@@ -57,16 +63,32 @@ class Place:
         shelves = shelves_inside(self.spots, self.navigator.furniture.get(node), node, relation)
         if shelves:
             return self._place_in_shelf(name, node, shelves)
-        spot = None
-        for k, _ in self.spots.places_of(node, relation):
-            spot = self.spots.free_spot(name, node, k, self.rng, {self.world.object_index(name)})
-            if spot is not None:
-                break
-        if spot is None:
+        covered = covered_places(self.spots, node, relation)  # under a level above: from the front, as shelves
+        index = self.world.object_index(name)
+        spots = _spread([spot for k, _ in self.spots.places_of(node, relation) if k not in covered
+                         for spot in islice(self.spots.free_spots(name, node, k, self.rng, {index}), SPOT_DRAWS)],
+                        TOP_SPOT_GAP, 2 * TOP_SPOTS)
+        spots = sorted(spots, key=lambda spot: not self._reachable(name, node, np.array(spot.pos)))[:TOP_SPOTS]
+        failures = []
+        for spot in spots:  # each lowered onto until one is let go on (or the object is lost)
+            target = np.array(spot.pos)
+            failure, short = self._carry_to(name, node, target)
+            if failure is not None:
+                return failure
+            outcome = None if short else self._lower_checked(name, node, target)
+            if outcome is None:  # no clear way down from here: straight down from above the spot, unchecked
+                outcome = self._lower_onto(name, node, target, short)
+            if outcome.success or self.arm.held is None:
+                return outcome
+            failures.append(outcome.reason.removeprefix("place: "))
+        if covered:
+            outcome = self._place_in_shelf(name, node, covered)
+            if outcome.success or self.arm.held is None or not failures:
+                return outcome
+            failures.append(outcome.reason.removeprefix("place: "))
+        if not failures:
             return SkillResult(False, f"place: no free spot for {name} on {node}")
-        target = np.array(spot.pos)
-        failure, short = self._carry_to(name, node, target)
-        return failure if failure is not None else self._lower_onto(name, node, target, short)
+        return SkillResult(False, f"place: {'; '.join(failures)}")
 
     def _place_on_floor(self, name: str, room: str) -> SkillResult:
         """Put the held `name` on a free spot of the floor of `room`: near the robot when it is in that room,
@@ -104,11 +126,15 @@ class Place:
         if anchor in self.navigator.furniture:
             failure, short = self._carry_to(name, anchor, target)
             return failure if failure is not None else self._lower_onto(name, node, target, short)
+        held_at = self.arm.held_offset(name)
         try:
             self.navigator.drive_to(self.navigator.stand_near(tuple(target[:2])), self.arm.carry(),
                                     self.arm.held_reach(), **CARRY_MOTION)
         except HomerError as error:
             return SkillResult(False, f"place: {error}")
+        slip = float(np.linalg.norm(self.arm.held_offset(name) - held_at))
+        if slip > CARRY_SLIP:
+            return self._slipped(name, slip)
         return self._lower_onto(name, node, target, short=False)
 
     def _carry_to(self, name: str, node: str, target: np.ndarray) -> tuple[SkillResult | None, bool]:
@@ -122,12 +148,15 @@ class Place:
         except NavigationError as error:
             return SkillResult(False, f"place: {error}"), False
         slip = float(np.linalg.norm(self.arm.held_offset(name) - held_at))
-        if slip > CARRY_SLIP and self.arm.hand_empty():
+        return (self._slipped(name, slip) if slip > CARRY_SLIP else None), short
+
+    def _slipped(self, name: str, slip: float) -> SkillResult:
+        """The failure of a carry in which `name` moved `slip` m (more than CARRY_SLIP) in the hand: it fell out,
+        or, still in the hand, slipped (the caller decides where it goes down)."""
+        if self.arm.hand_empty():
             self.arm.held = None
-            return SkillResult(False, f"place: {name} fell out of the hand while carried"), short
-        if slip > CARRY_SLIP:  # still in the hand: the caller decides where it goes down
-            return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand while carried"), short
-        return None, short
+            return SkillResult(False, f"place: {name} fell out of the hand while carried")
+        return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand while carried")
 
     def _lower_onto(self, name: str, node: str, target: np.ndarray, short: bool) -> SkillResult:
         """Lower the held `name` onto `target` (m) on furniture `node` from APPROACH m above, as it hangs in the
@@ -154,7 +183,64 @@ class Place:
             return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
         self.controller.move_through(down)
         self.controller.settle(0.003)
-        return self._let_go(name, node, 0.05, self._retreat(release, quat))
+        return self._release_on(name, node, target, release, quat)
+
+    def _release_on(self, name: str, node: str, target: np.ndarray, release: np.ndarray, quat: np.ndarray
+                    ) -> SkillResult:
+        """With the held `name` lowered for `target` (m, its spot on `node`; the grip site at `release`, m, at
+        `quat`): let go and retreat, unless its lowest point stopped more than STOPPED_ABOVE m above where its bottom
+        goes (it came down on something): then back up APPROACH m, still holding it."""
+        index = self.world.object_index(name)
+        size = np.asarray(CATALOG[self.world.layout.objects[index].cls].size)
+        tilt = np.abs(self.world.data.xmat[self.world.object_body_ids[index]].reshape(3, 3)[2])
+        low = float(self.world.object_pose(name)[0][2] - tilt @ size / 2)  # its lowest point (it may hang tilted)
+        stopped = low - float(target[2] - size[2] / 2) - 0.01
+        if stopped > STOPPED_ABOVE:
+            self.arm.grip_line(release + np.array([0.0, 0.0, APPROACH]), quat)
+            return SkillResult(False, f"place: {name} stopped {stopped * 100:.1f} cm above its spot on {node}")
+        opening = max(TOP_RELEASE_OPENING, self._held_opening() + RELEASE_OPENING)
+        return self._let_go(name, node, opening, self._retreat(release, quat))
+
+    def _lower_checked(self, name: str, node: str, target: np.ndarray) -> SkillResult | None:
+        """Lower the held `name` onto `target` (m, a spot on furniture `node`) from where the robot stands, the
+        base kept there, along a way (eased to APPROACH m above the spot, then straight down, the object as it
+        hangs in the hand) that keeps the arm and the object clear of the apartment; let go and retreat. None
+        (nothing moved) where no such way is found."""
+        held = self.arm.held_object(name)
+        rotation = self.world.data.site("robot/grip").xmat.reshape(3, 3).copy()
+        quat = matrix_to_quat(rotation)
+        release = target + np.array([0.0, 0.0, 0.01]) - rotation @ held.position
+        above = release + np.array([0.0, 0.0, APPROACH])
+        start = self.ik.solve(self.controller.target, above, quat, base_cost=ARC_BASE_COST)
+        if not start.converged or not self.clearance.clear(start.q, held=held):
+            return None
+        path = self.arm.checked_line(start.q, [above, release], quat, held)
+        ease = None if path is None else self._ease_path(self.controller.target, start.q, held)
+        if ease is None:
+            return None
+        self._ease_to(ease, start.q)
+        self.controller.move_through(path)
+        self.controller.settle(0.003)
+        return self._release_on(name, node, target, release, quat)
+
+    def _reachable(self, name: str, node: str, target: np.ndarray) -> bool:
+        """Whether the hand, holding `name` as it does now, reaches over `target` (m, a spot on furniture `node`) from
+        the base pose in front of `node` facing it, the base kept there (the IK pushes the base into the furniture
+        to reach a spot far back, and the furniture stops it)."""
+        grip = self.world.data.site("robot/grip")
+        above = target + grip.xpos - self.world.object_pose(name)[0] + np.array([0.0, 0.0, 0.01 + APPROACH])
+        try:
+            base = self.navigator.stand_pose(node, tuple(target[:2]))
+        except NavigationError:
+            return False
+        q = self.controller.target.copy()
+        q[:3] = base
+        return self.ik.solve(q, above, self.arm.grip_quat(), base_cost=ARC_BASE_COST).converged
+
+    def _held_opening(self) -> float:
+        """The fingers' opening now (m per finger): round the held object, whose width a release must open past
+        (a cd held across 12.5 cm stays wedged between fingers opened to 5 cm each)."""
+        return float(np.mean(self.controller.q()[-2:]))
 
     def _retreat(self, release: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
         """Configurations that take the open hand away from an object it let go of at `release` (m): back along
@@ -246,7 +332,7 @@ class Place:
                                       f"{node} and no longer goes in clear")
         self.controller.move_through(path_in[1:])
         self.controller.settle(0.003)
-        return self._let_go(name, node, float(np.mean(self.controller.q()[-2:])) + RELEASE_OPENING,
+        return self._let_go(name, node, self._held_opening() + RELEASE_OPENING,
                             self.arm.line(release, outside, quat, steps=4, loose_end=True), inside=True)
 
     def _into_shelf(self, out: np.ndarray) -> np.ndarray:

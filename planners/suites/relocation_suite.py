@@ -35,13 +35,13 @@ import numpy as np
 from homer_sim.clock import GRID_MIN
 from homer_sim.data.dataset import Dataset, Day
 from homer_sim.execution import IN_PROCESS, Backend
+from homer_sim.graph import OUTSIDE
 from homer_sim.home.catalog import CATALOG
 from planners.suites.collateral import collateral_reason, displaced
 from planners.suites.grasp_suite import stable_hash
 
 log = logging.getLogger(__name__)
 
-OUTSIDE = "outside"  # the room beyond the front door
 NO_FALL_FAMILIES = ("cloth", "sphere")  # shapes with no up to keep
 REPLAYS = 4  # snapshots (latest first) at which the day is lived again to find the object on its source
 TARGET_OVERALL = 0.97
@@ -224,10 +224,12 @@ def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, des
     of furniture with doors or drawers), one is open at a time: two open doors can leave no way between them (a
     cupboard's and the dishwasher's across the kitchen), and a full hand opens and closes nothing; so the object
     is set down on the nearest open top (`Robot.set_down`) while the source closes and the destination opens."""
+    from planners.skills.parts import parts_to_open
+
     graph = robot.observer.update()
     anchor = _anchor(graph, robot.world, source)
     at = anchor if anchor in robot.navigator.furniture else None
-    first = _holding(robot.world, containers.get(anchor, []), obj, _inside(graph, robot.world, obj))
+    first = parts_to_open(robot.world, graph, containers.get(anchor, []), obj)
     second = [p for p in containers.get(destination, []) if p not in first]
     both = bool(first and second)
     failure = _open(robot, first if both else first + second)
@@ -249,28 +251,6 @@ def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, des
     if not result.success:
         return f"place: {result.reason.removeprefix('place: ')}"
     return _close(robot, second if both else first + second)
-
-
-def _inside(graph, world, obj: str) -> bool:
-    """Whether `obj` (or what it rests on) is INSIDE the furniture it is reached at, not on it."""
-    from homer_sim.graph import INSIDE, RELATION_NAMES
-
-    movable = set(world.object_names)
-    while graph.parent_of(obj) in movable:
-        obj = graph.parent_of(obj)
-    return graph.relation_of(obj) == RELATION_NAMES[INSIDE]
-
-
-def _holding(world, parts: list[str], obj: str, inside: bool) -> list[str]:
-    """Of a piece of furniture's `parts` (doors or drawers) those to open to take `obj` out: of drawers, the one
-    it lies in if it is `inside` (the highest whose body is below it); every door (a door covers every shelf
-    behind it). A drawer left open below or above another keeps the robot from reaching the other's handle as it
-    closes."""
-    drawers = [p for p in parts if world.articulations[p].joint_type == "slide"]
-    z = world.object_pose(obj)[0][2]
-    below = [p for p in drawers if world.data.xpos[world.model.body(p).id][2] < z]
-    lying_in = max(below, key=lambda p: world.data.xpos[world.model.body(p).id][2], default=None)
-    return [p for p in parts if p not in drawers or (inside and p == lying_in)]
 
 
 def _open(robot, parts: list[str]) -> str | None:

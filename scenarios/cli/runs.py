@@ -10,9 +10,12 @@ import argparse
 from pathlib import Path
 
 from model.names import METHODS
+from model.selection import default_method
 from scenarios.breakfast_data import DataSpec
 from scenarios.cli.common import add_backend_arguments, backend_from_args, emit, positive_int
 from scenarios.registry import SCENARIOS
+
+DEFAULT_HELP = "the best on validation days in model/validation_table.json"
 
 
 def add_commands(subparsers: argparse._SubParsersAction) -> None:
@@ -26,8 +29,8 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     breakfast.add_argument("--rrd", type=Path, default=None, help="write a rerun recording of the morning here")
     breakfast.add_argument("--skip-breakfast", action="store_true",
                            help="the person skips breakfast that day (the robot puts its help back later)")
-    breakfast.add_argument("--method", default=DataSpec.method, choices=METHODS, metavar="METHOD",
-                           help=f"predictor, one of {', '.join(METHODS)} (default {DataSpec.method})")
+    breakfast.add_argument("--method", default=None, choices=METHODS, metavar="METHOD",
+                           help=f"predictor, one of {', '.join(METHODS)} (default: {DEFAULT_HELP})")
     breakfast.add_argument("--json", action="store_true", help="print one JSON object")
     breakfast.set_defaults(func=cmd_demo_breakfast)
 
@@ -64,8 +67,8 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     evaluate.add_argument("--data", type=Path, required=True, help="dataset folder (with meta.json)")
     evaluate.add_argument("--households", default=None, help="comma-separated subset of households (default all)")
     evaluate.add_argument("--days", type=positive_int, default=None, help="only the first N test days of each")
-    evaluate.add_argument("--method", default=DataSpec.method, choices=(*METHODS, "oracle"), metavar="METHOD",
-                          help=f"predictor ({', '.join(METHODS)}) or oracle (default {DataSpec.method})")
+    evaluate.add_argument("--method", default=None, choices=(*METHODS, "oracle"), metavar="METHOD",
+                          help=f"predictor ({', '.join(METHODS)}) or oracle (default: {DEFAULT_HELP})")
     add_backend_arguments(evaluate, "assisted days")
     evaluate.add_argument("--seed", type=int, default=0, help="seed of the robot's random streams (default 0)")
     evaluate.add_argument("--window", type=positive_int, default=DataSpec.window_min,
@@ -101,7 +104,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 def cmd_assist_eval(args: argparse.Namespace) -> int:
     from scenarios.assist_eval import EvalSpec, assist_eval, markdown_table
 
-    spec = EvalSpec(str(args.data), args.method, args.seed, args.window,
+    spec = EvalSpec(str(args.data), args.method or default_method(), args.seed, args.window,
                     str(args.checkpoints) if args.checkpoints else None, args.until)
     households = [h.strip() for h in args.households.split(",") if h.strip()] if args.households else None
     result = assist_eval(spec, households, args.days, backend_from_args(args), args.out, progress=not args.quiet)

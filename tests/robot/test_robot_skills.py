@@ -161,3 +161,15 @@ def test_robot_puts_cereal_from_the_table_back_on_its_cupboard_shelf() -> None:
     drift, name = _others_moved(world, before, "food_cereal")
     assert drift < 0.02, f"{name} moved {drift * 100:.1f} cm"
     assert world.warnings() == 0 and not world.has_nan()
+
+
+def test_open_shelves_lower_levels_are_covered_and_a_showers_floor_is_not(world: World) -> None:
+    from homer_sim.home.spots import Spots
+    from planners.skills.parts import covered_places
+
+    spots = Spots(world)
+    tvstand = [k for k, _ in spots.places_of("tvstand_home_office", None)]
+    assert covered_places(spots, "tvstand_home_office", None) == tvstand[:-1]  # all but the top
+    assert covered_places(spots, "shower", None) == []  # its small soap shelf covers little of the floor
+    assert covered_places(spots, "table_dining_room", None) == []
+

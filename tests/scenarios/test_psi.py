@@ -173,3 +173,17 @@ def test_nothing_is_taken_from_or_put_on_furniture_the_person_is_at() -> None:
     reasons = {r.obj: why for r, why in plan.skipped}
     assert reasons == {"bowl": "the person is at table", "milk": "the person is at table"}
     assert {r.obj for r in _plan(graph, rollout).relocations} == {"bowl", "milk", "spoon"}
+
+
+def test_nothing_is_taken_to_or_from_outside() -> None:
+    nodes = ("kitchen", "outside", "bench", "keys", "bag")
+    categories = ("room", "room", "furniture", "object", "object")
+    graph = SceneGraph(nodes, categories, np.array([-1, -1, 0, 2, 1]), np.array([0, 0, ON, ON, INSIDE]))
+    parent = np.repeat(graph.parent.astype(np.int64)[None, None], 2, axis=0)
+    parent[:, 0, 3], parent[:, 0, 4] = 1, 2  # keys go out, the bag comes in onto the bench
+    confidence = np.full(parent.shape, 0.9, dtype=np.float32)
+    rollout = Rollout(parent, confidence, parent.copy(), np.full(parent.shape, 0.05, dtype=np.float32))
+    plan = psi(graph, np.array([c == "object" for c in categories]), rollout, threshold=0.0, window_steps=2,
+               containers={})
+    assert plan.relocations == () and plan.steps == ()
+    assert sorted(r.obj for r, why in plan.skipped if "outside the apartment" in why) == ["bag", "keys"]
