@@ -85,8 +85,9 @@ class Navigator:
 
     def floor_object_rects(self, skip: frozenset[int] = frozenset()) -> list[tuple[float, float, float, float]]:
         """World rectangles (x0, y0, x1, y1) in m, FLOOR_MARGIN beyond the footprints of the objects whose underside
-        is lower than ON_THE_FLOOR (a bin, a vacuum cleaner, a basket set down on the floor): the floor plan holds
-        only furniture, and a base driving into them pushes them away. `skip`: object indices left out."""
+        is lower than ON_THE_FLOOR (a bin, a vacuum cleaner, a basket set down on the floor) and stands outside
+        the floor plan's furniture (not on a cabinet's bottom shelf): the floor plan holds only furniture, and a
+        base driving into them pushes them away. `skip`: object indices left out."""
         data = self.world.data
         rects = []
         for index, (body, half) in enumerate(zip(self.world.object_body_ids, self.half_sizes, strict=True)):
@@ -94,7 +95,10 @@ class Navigator:
                 continue
             extent = np.abs(data.xmat[body].reshape(3, 3)) @ half
             centre = data.xpos[body]
-            if centre[2] - extent[2] < ON_THE_FLOOR:
+            i, j = self.plan.cell(float(centre[0]), float(centre[1]))
+            inside = not (0 <= i < self.plan.occupied.shape[0] and 0 <= j < self.plan.occupied.shape[1]) or bool(
+                self.plan.occupied[i, j])
+            if centre[2] - extent[2] < ON_THE_FLOOR and not inside:
                 low, high = centre[:2] - extent[:2] - FLOOR_MARGIN, centre[:2] + extent[:2] + FLOOR_MARGIN
                 rects.append((float(low[0]), float(low[1]), float(high[0]), float(high[1])))
         return rects
