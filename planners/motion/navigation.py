@@ -61,11 +61,13 @@ class Navigator:
                            for name in world.articulations}
         self.half_sizes = np.array([CATALOG[o.cls].size for o in self.layout.objects]) / 2  # (n_objects, 3), m
         self.others: Callable[[], list[tuple[float, float, float, float]]] = list
+        self.exempt: frozenset[int] = frozenset()  # objects (indices) base poses may stand next to: the one picked
 
     def obstacles(self) -> list[tuple[float, float, float, float]]:
         """World rectangles (x0, y0, x1, y1) in m the base must keep out of beyond the floor plan: open doors and
-        drawers (`open_part_rects`), objects standing on the floor (`floor_object_rects`) and `others`."""
-        return self.open_part_rects() + self.floor_object_rects() + self.others()
+        drawers (`open_part_rects`), objects standing on the floor (`floor_object_rects`, but the `exempt` ones: the
+        base stands next to what it picks, as it did before they counted) and `others`."""
+        return self.open_part_rects() + self.floor_object_rects(self.exempt) + self.others()
 
     def _free(self, xy: np.ndarray, radius: float, still: list, others: list, blocked: list[bool]) -> bool:
         """Whether the base disk of `radius` m at xy (m) is clear of the floor plan, `still` and `others` (world
@@ -81,16 +83,22 @@ class Navigator:
     def _failure(message: str, blocked: bool) -> NavigationError:
         return NavigationError(f"{message}: {IN_THE_WAY}" if blocked else message)
 
-    def floor_object_rects(self) -> list[tuple[float, float, float, float]]:
+    def floor_object_rects(self, skip: frozenset[int] = frozenset()) -> list[tuple[float, float, float, float]]:
         """World rectangles (x0, y0, x1, y1) in m, FLOOR_MARGIN beyond the footprints of the objects whose underside
-        is lower than ON_THE_FLOOR (a bin, a vacuum cleaner, a basket set down on the floor): the floor plan holds
-        only furniture, and a base driving into them pushes them away."""
+        is lower than ON_THE_FLOOR (a bin, a vacuum cleaner, a basket set down on the floor) and stands outside
+        the floor plan's furniture (not on a cabinet's bottom shelf): the floor plan holds only furniture, and a
+        base driving into them pushes them away. `skip`: object indices left out."""
         data = self.world.data
         rects = []
-        for body, half in zip(self.world.object_body_ids, self.half_sizes, strict=True):
+        for index, (body, half) in enumerate(zip(self.world.object_body_ids, self.half_sizes, strict=True)):
+            if index in skip:
+                continue
             extent = np.abs(data.xmat[body].reshape(3, 3)) @ half
             centre = data.xpos[body]
-            if centre[2] - extent[2] < ON_THE_FLOOR:
+            i, j = self.plan.cell(float(centre[0]), float(centre[1]))
+            inside = not (0 <= i < self.plan.occupied.shape[0] and 0 <= j < self.plan.occupied.shape[1]) or bool(
+                self.plan.occupied[i, j])
+            if centre[2] - extent[2] < ON_THE_FLOOR and not inside:
                 low, high = centre[:2] - extent[:2] - FLOOR_MARGIN, centre[:2] + extent[:2] + FLOOR_MARGIN
                 rects.append((float(low[0]), float(low[1]), float(high[0]), float(high[1])))
         return rects
@@ -122,7 +130,7 @@ class Navigator:
         rotation = np.column_stack([front_normal, [-front_normal[1], front_normal[0]]])  # furniture frame -> world
         sides = sorted(access_sides(f), key=lambda side: side[1] - float(
             np.dot(rotation.T @ (np.asarray(target_xy) - centre), side[0])))
-        still, others, blocked = self.open_part_rects() + self.floor_object_rects(), self.others(), [False]
+        still, others, blocked = self.open_part_rects() + self.floor_object_rects(self.exempt), self.others(), [False]
         for local_normal, half_depth, _ in sides:
             normal = rotation @ local_normal
             tangent = np.array([-normal[1], normal[0]])
@@ -141,7 +149,7 @@ class Navigator:
         target = np.asarray(target_xy, dtype=float)
         here = self.controller.q()[:2]
         toward_here = math.atan2(here[1] - target[1], here[0] - target[0])
-        still, others, blocked = self.open_part_rects() + self.floor_object_rects(), self.others(), [False]
+        still, others, blocked = self.open_part_rects() + self.floor_object_rects(self.exempt), self.others(), [False]
         for turn in NEAR_TURNS:
             for distance in NEAR_DISTANCES:
                 angle = toward_here + float(turn)

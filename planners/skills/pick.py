@@ -66,7 +66,15 @@ class Pick:
         """Grasp object `name` and lift it LIFT m; `node` (the furniture it is on or in) is where to stand.
         `into`: where it goes next; a cabinet's shelf takes an object held from the side or pitched down from the
         front (a hand pointing straight down does not fit under the shelf above), so from a table it is then
-        grasped that way first."""
+        grasped that way first. Standing on the floor, the object is no obstacle to the base poses that reach it
+        (`Navigator.exempt`)."""
+        self.navigator.exempt = frozenset({self.world.object_index(name)})
+        try:
+            return self._pick(name, node, into)
+        finally:
+            self.navigator.exempt = frozenset()
+
+    def _pick(self, name: str, node: str | None, into: str | None) -> SkillResult:
         cls = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls]
         reason = ungraspable_reason(cls)
         if reason is not None:

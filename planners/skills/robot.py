@@ -72,12 +72,12 @@ class Robot:
         on what lies there, the hand empty."""
         name = self.held
         if name is None:
-            return SkillResult(False, "set down: the robot holds nothing")
+            return SkillResult(False, "set-down: the robot holds nothing")
         x, y = self.controller.q()[:2]
         tops = sorted((float(np.hypot(f.pos[0] - x, f.pos[1] - y)), f.name) for f in self.world.layout.furniture
                       if f.name not in avoid and f.name in self.navigator.furniture
                       and self.spots.places_of(f.name, ON))
-        result = SkillResult(False, f"set down: no open top for {name}")
+        result = SkillResult(False, f"set-down: no open top for {name}")
         for _, top in tops[:tries]:
             result = self.place(top, ON)
             if result.success or self.held is None:
@@ -87,7 +87,7 @@ class Robot:
             on = self.observer.update().parent_of(on)
         if self.held is None and on in self.navigator.furniture and on not in avoid and not self.arm.fallen_over(name):
             return SkillResult(True)
-        return result
+        return SkillResult(False, f"set-down: {result.reason.removeprefix('place: ').removeprefix('set-down: ')}")
 
     def retract(self) -> None:
         """Tuck the arm in place (see `planners.motion.arm.Arm.retract`)."""

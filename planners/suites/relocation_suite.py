@@ -240,7 +240,7 @@ def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, des
         return f"pick: {result.reason}"
     if both:
         result = robot.set_down(containers)
-        failure = None if result.success else f"set-down: {result.reason}"
+        failure = None if result.success else result.reason
         failure = failure or _close(robot, first) or _open(robot, second)
         if failure is not None:
             return failure
