@@ -155,9 +155,12 @@ def test_a_bad_script_fails_a_ray_run_with_the_local_error(ray_cluster, tmp_path
 
 def test_ctrl_c_on_a_ray_run_leaves_complete_days_that_a_local_run_resumes(ray_cluster, reference: Path,
                                                                            tmp_path: Path) -> None:
+    # seventeen days, so that the interrupt lands mid-run even on a busy machine (five were done before it did);
+    # days are independent, so the five of `reference` are among them byte for byte
+    days = {**DAYS, "train_days": 16}
     out = tmp_path / "data"
     address = ray_cluster.get_runtime_context().gcs_address  # this instance, not the latest one on the machine
-    command = [str(HOMER), "generate", "--households", "1", "--train-days", "4", "--test-days", "1", "--seed", "11",
+    command = [str(HOMER), "generate", "--households", "1", "--train-days", "16", "--test-days", "1", "--seed", "11",
                "--out", str(out), "--ray", address, "--json"]
     driver = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                               env={**os.environ, "RAY_AUTH_MODE": "token"})  # by address, Ray 2.60 asks for it
@@ -168,11 +171,14 @@ def test_ctrl_c_on_a_ray_run_leaves_complete_days_that_a_local_run_resumes(ray_c
     stdout, stderr = driver.communicate(timeout=60)
     assert driver.returncode == 130 and "interrupted" in stderr and not stdout, stderr
     written = sorted(out.glob("household_a/*/day_*.npz"))
-    assert 1 <= len(written) < 5 and not list(out.rglob("*.tmp"))
+    assert 1 <= len(written) < 17 and not list(out.rglob("*.tmp"))
     for path in written:  # complete files only
         assert read_day(path).steps > 0
-    summary = generate(out, **DAYS, progress=False)
-    assert summary["days_written"] == 5 - len(written) and _digest(out) == _digest(reference)
+    summary = generate(out, **days, progress=False)
+    assert summary["days_written"] == 17 - len(written)
+    resumed, five = _digest(out), _digest(reference)
+    assert {name: resumed[name] for name in five if name != "meta.json"} == {
+        name: digest for name, digest in five.items() if name != "meta.json"}
 
 
 def test_a_ray_run_resumes_a_stopped_local_run(ray_cluster, reference: Path, tmp_path: Path) -> None:
@@ -193,7 +199,7 @@ def test_grasp_trials_on_ray_equal_the_local_ones(ray_cluster) -> None:
                   for backend in (Backend(), RAY))
     assert [(r["class"], r["trial"]) for r in ray["results"]] == [("mug", 0), ("cd", 0)]
     assert local["results"] == ray["results"]  # success, reason, lift and slip to the last bit
-    assert [r["success"] for r in local["results"]] == [False, True]  # the mug knocks the glass 5.5 cm (collateral)
+    assert [r["success"] for r in local["results"]] == [True, True]  # the mug's grasp no longer knocks the glass
     assert ray["execution"]["mode"] == "ray" and ray["execution"]["workers"] >= 1
 
 
