@@ -22,6 +22,8 @@ CAUSE_PATTERNS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("no grasp fits", ("no grasp fits",)),
     ("every grasp failed", ("every grasp",)),
 )
+LASTING = ("lies fallen over",)
+"""Causes in the object's own state where it lies: trying again before someone has moved it fails the same way."""
 OTHER = "other"
 CAUSES: tuple[str, ...] = (*(name for name, _ in CAUSE_PATTERNS), OTHER)
 """Every cause, in table order; an index into it is a cause code (never reorder: codes are in observations)."""

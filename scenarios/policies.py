@@ -2,7 +2,8 @@
 
 `PsiPolicy` is the paper's robot: it rolls a predictor `window_min` ahead from the observed scene graph, turns
 the first predicted changes into relocations with Psi (`scenarios.psi`), and remembers its own help (objects it
-placed stay for the person; help left unused goes back; a failed relocation waits a window). `OraclePredictor`
+placed stay for the person; help left unused goes back; a failed relocation waits a window, or, when the cause is
+in the object's own state (`scenarios.causes.LASTING`), until someone has moved the object). `OraclePredictor`
 predicts from the unassisted replay of the same day (perfect prediction, for separating manipulation from
 prediction). `RandomPolicy` asks for random relocations; `EmptyPolicy` never asks.
 """
@@ -20,7 +21,7 @@ from homer_sim.graph import INSIDE, ON, GraphError, SceneGraph
 from homer_sim.home.layout import Layout
 from homer_sim.person.executor import DayLog
 from model.predictor import Rollout
-from scenarios.causes import CAUSES
+from scenarios.causes import CAUSES, LASTING
 from scenarios.psi import Holds, Plan, Relocation, psi, unused_help
 from scenarios.task import NO_RELOCATION, SceneInfo
 
@@ -108,7 +109,7 @@ class PsiPolicy:
         """Forget the help given and the plans made (a new day)."""
         self.holds = Holds()
         self.returns: dict[str, Relocation] = {}  # unused help to put back, until tried or the person moves it
-        self.failed: dict[str, tuple[float, str]] = {}  # object -> (retry after minute, cause)
+        self.failed: dict[str, tuple[float, str, str]] = {}  # object -> (retry after minute, cause, where it was)
         self.plans: list[tuple[int, Plan]] = []
         self._asked: dict[str, Relocation] = {}
 
@@ -118,7 +119,7 @@ class PsiPolicy:
         if timestep.first():
             self.reset()
         minute = int(obs["minute"])
-        self._learn(obs["outcomes"])
+        self._learn(obs["outcomes"], graph_of(self.scene, obs))
         if minute < obs["robot_busy_until"]:
             return action_of(self.scene, ())
         plan = self.plan(obs)
@@ -145,12 +146,12 @@ class PsiPolicy:
         x, y = obs["person_position"]
         return psi(graph, self.predictor.movable, rollout, threshold=self.threshold, window_steps=self.window_steps,
                    containers=self.scene.containers, carried=carried,
-                   excluded=lambda obj: self._excluded(obj, minute), holds=self.holds, already_open=open_now,
+                   excluded=lambda obj: self._excluded(obj, minute, graph), holds=self.holds, already_open=open_now,
                    in_use=furniture_near(self.scene.layout, float(x), float(y)),
                    returns=tuple(self.returns.values()))
 
-    def _learn(self, outcomes: np.ndarray) -> None:
-        """Remember what the robot did with the relocations asked for at the previous tick."""
+    def _learn(self, outcomes: np.ndarray, graph: SceneGraph) -> None:
+        """Remember what the robot did with the relocations asked for at the previous tick (`graph`: now)."""
         nodes = self.scene.nodes
         for obj, source, destination, done, ended, cause, minute in outcomes[outcomes[:, 0] != NO_RELOCATION]:
             relocation = self._asked.get(nodes[obj]) or Relocation(nodes[obj], nodes[source], nodes[destination],
@@ -161,15 +162,20 @@ class PsiPolicy:
                 self.holds.add(relocation.obj, nodes[ended], minute, minute + self.window_min,
                                source=relocation.source)
             elif not done:
-                self.failed[relocation.obj] = (minute + self.window_min, CAUSES[cause])
+                why = CAUSES[cause]
+                retry_after = np.inf if why in LASTING else minute + self.window_min
+                self.failed[relocation.obj] = (retry_after, why, graph.parent_of(relocation.obj))
         self._asked = {}
 
-    def _excluded(self, obj: str, minute: float) -> str | None:
+    def _excluded(self, obj: str, minute: float, graph: SceneGraph) -> str | None:
         reason = self.scene.ungraspable.get(obj)
         if reason is not None:
             return f"not graspable: {reason}"
-        retry_after, why = self.failed.get(obj, (-np.inf, ""))
-        return f"failed earlier ({why}); not retried before {retry_after:.0f} min" if minute < retry_after else None
+        retry_after, why, where = self.failed.get(obj, (-np.inf, "", ""))
+        if minute >= retry_after or graph.parent_of(obj) != where:  # waited long enough, or moved since
+            return None
+        when = "until it has been moved" if np.isinf(retry_after) else f"before {retry_after:.0f} min"
+        return f"failed earlier ({why}); not retried {when}"
 
     def _log_prediction(self, graph: SceneGraph, rollout: Rollout, minute: int) -> None:
         """The predicted graph at minute + window on `graph/predicted` (when the argmax is an in-tree)."""

@@ -187,3 +187,26 @@ def test_nothing_is_taken_to_or_from_outside() -> None:
                containers={})
     assert plan.relocations == () and plan.steps == ()
     assert sorted(r.obj for r, why in plan.skipped if "outside the apartment" in why) == ["bag", "keys"]
+
+
+def test_a_failure_in_the_object_itself_waits_until_it_is_moved_others_a_window() -> None:
+    """PsiPolicy's memory of failed relocations: 'fell out of the hand' is tried again after one window; 'lies
+    fallen over' not until the object has been moved (the same attempt would fail the same way every tick)."""
+    from types import SimpleNamespace
+
+    from scenarios.causes import CAUSES
+    from scenarios.policies import PsiPolicy
+    from scenarios.task import NO_RELOCATION
+
+    scene = SimpleNamespace(nodes=NODES, index=IDX, ungraspable={})
+    policy = PsiPolicy(scene, SimpleNamespace(params={"threshold": 0.5}), window_min=30)
+    graph = _graph()
+    outcomes = np.full((4, 7), NO_RELOCATION, dtype=np.int32)
+    for row, (obj, cause) in enumerate((("bowl", "fell out of the hand"), ("milk", "lies fallen over"))):
+        outcomes[row] = (IDX[obj], IDX[graph.parent_of(obj)], IDX["table"], 0, IDX[graph.parent_of(obj)],
+                         CAUSES.index(cause), 400)
+    policy._learn(outcomes, graph)
+    assert policy._excluded("bowl", 420, graph) and policy._excluded("milk", 420, graph)
+    assert policy._excluded("bowl", 430, graph) is None  # a window later
+    assert "until it has been moved" in policy._excluded("milk", 900, graph)
+    assert policy._excluded("milk", 900, _graph(milk="table")) is None  # the person moved it
