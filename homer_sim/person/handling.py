@@ -2,8 +2,9 @@
 
 `Handling` is the part of the person that touches objects and articulations; `homer_sim.person.executor.Executor`
 builds it and adds the day and script dispatch, `homer_sim.person.walking.Walker` the walking. Grasps weld an
-object to a hand at its current relative pose and lift it with physics; placements release it at a sampled free
-spot where it settles; doors and drawers move along minimum-jerk paths with physics stepping in between.
+object to a hand at its current relative pose and lift it with physics; a put-down brings it above a sampled free
+spot, lowers it until it touches down and lets go; doors and drawers are driven through their joints by force
+along minimum-jerk paths.
 """
 
 from __future__ import annotations
@@ -31,6 +32,14 @@ LIFT_M, LIFT_STEPS = 0.06, 30
 SETTLE_S = 3.0
 DRIVE_PROFILE = {"hinge": (16, 5), "slide": (25, 6)}  # increments, physics steps per increment
 DRIVE_REST_STEPS = 10
+LOWER_M = 0.02  # m above its spot from which a put-down object is lowered onto it
+LOWER_PRESS_M = 0.01  # m the hand goes on below the spot when the object has not touched down by then
+LOWER_STEPS, LOWER_STEP_PHYSICS = 10, 5  # increments of the lowering, physics steps per increment
+DRIVE_OMEGA = 40.0  # rad/s, the natural frequency of the spring that keeps a driven part on its path
+DRIVE_TOLERANCE = 0.02  # of the joint's range: how near its target a driven part is let go
+DRIVE_AT_REST = 0.05  # rad/s or m/s under which a driven part at its target is let go
+DRIVE_STUCK = 0.1  # of the joint's range: a driven part further than this from its target is stuck
+DRIVE_HOLD_STEPS = 250  # physics steps the force may hold a part after its path ends, to reach its target
 OPEN_ENOUGH = 0.9
 
 
@@ -99,34 +108,58 @@ class Handling:
             raise PhysicsError(f"{name} fell out of the apartment (z = {pos[:, 2].min():.2f} m)")
 
     def drive(self, art, openness: float) -> None:
-        """Move a door or drawer to `openness` along a minimum-jerk path, the hand on its handle.
+        """Move a door or drawer to `openness` by force, the hand on its handle.
 
-        The joint is moved kinematically in small increments with physics steps in between, so whatever the
-        part touches is pushed and a drawer carries its contents along by friction.
+        A force on the joint (`qfrc_applied`) makes the part follow a minimum-jerk path: the path's own inertial
+        and damping force plus a critically damped spring to it, re-evaluated at every physics step; at the end
+        the force holds the target until the part is there and at rest (at most DRIVE_HOLD_STEPS), then lets go.
+        Whatever the part touches is pushed, and a drawer carries its contents along by friction; a door that
+        touches an object stops and raises DoorBlocked; a part the force leaves far from its target (jammed, too
+        stiff) raises AvatarError.
         """
         model, data = self.world.model, self.world.data
         lo, hi = art.range
-        start, target = data.qpos[art.qpos_adr], lo + openness * (hi - lo)
+        start, target = float(data.qpos[art.qpos_adr]), lo + openness * (hi - lo)
         increments, steps = DRIVE_PROFILE[art.joint_type]
-        dt = steps * model.opt.timestep
+        duration = increments * steps * model.opt.timestep
         handle = model.site(f"{art.name}/handle").id
         hand = self.avatar.free_hand()  # with both hands full the person pushes it with an elbow
-        previous = start
-        for i in range(1, increments + 1):
-            s = i / increments
+        inertia = float(model.dof_M0[art.dof_adr])  # the part's own (a door on a fixed hinge), armature included
+        damping = float(model.dof_damping[art.dof_adr])
+        stiffness, gain = inertia * DRIVE_OMEGA**2, 2.0 * inertia * DRIVE_OMEGA
+        tolerance = DRIVE_TOLERANCE * (hi - lo)
+
+        def push(t: float) -> None:
+            s = min(t / duration, 1.0)
             q = start + (target - start) * (10 * s**3 - 15 * s**4 + 6 * s**5)
-            data.qpos[art.qpos_adr] = q
-            data.qvel[art.dof_adr] = (q - previous) / dt + 1e-9  # nonzero: the tree stays awake
-            previous = q
-            self.step(steps)
-            blocker = self._door_blocked(art) if art.joint_type == "hinge" else None
-            if blocker is not None:
-                data.qpos[art.qpos_adr], data.qvel[art.dof_adr] = q - (q - start) / i, 0.0
-                raise DoorBlocked(f"{art.name} is blocked by {blocker} at openness "
-                                  f"{self.world.openness(art.name):.2f}", blocker)
-            if hand is not None:
-                self.avatar.set_hand(hand, data.site_xpos[handle], follow=False)
-        data.qpos[art.qpos_adr], data.qvel[art.dof_adr] = target, 0.0
+            v = (target - start) * (30 * s**2 - 60 * s**3 + 30 * s**4) / duration if s < 1.0 else 0.0
+            a = (target - start) * (60 * s - 180 * s**2 + 120 * s**3) / duration**2 if s < 1.0 else 0.0
+            data.qfrc_applied[art.dof_adr] = (inertia * a + damping * v + stiffness * (q - data.qpos[art.qpos_adr])
+                                              + gain * (v - data.qvel[art.dof_adr]))
+
+        try:
+            t = 0.0
+            for _ in range(increments):
+                for _ in range(steps):
+                    push(t)
+                    self.step(1)
+                    t += model.opt.timestep
+                blocker = self._door_blocked(art) if art.joint_type == "hinge" else None
+                if blocker is not None:
+                    raise DoorBlocked(f"{art.name} is blocked by {blocker} at openness "
+                                      f"{self.world.openness(art.name):.2f}", blocker)
+                if hand is not None:
+                    self.avatar.set_hand(hand, data.site_xpos[handle], follow=False)
+            for _ in range(DRIVE_HOLD_STEPS):
+                if abs(data.qpos[art.qpos_adr] - target) < tolerance and abs(data.qvel[art.dof_adr]) < DRIVE_AT_REST:
+                    break
+                push(t)
+                self.step(1)
+        finally:
+            data.qfrc_applied[art.dof_adr] = 0.0
+        if abs(data.qpos[art.qpos_adr] - target) > DRIVE_STUCK * (hi - lo):
+            raise AvatarError(f"{art.name} is stuck at openness {self.world.openness(art.name):.2f}: the person's "
+                              f"push did not move it to {openness:.2f}")
         self.step(DRIVE_REST_STEPS)
         self.settle()  # what the part carried or pushed comes to rest
         if hand is not None:
@@ -249,25 +282,51 @@ class Handling:
         self.close_parts(opened)
 
     def release(self, name: str, spot: Spot) -> None:
-        """Put a held object (and its riders) at `spot` and let it settle."""
+        """Put a held object (and its riders) down at `spot`: the hand, turning it to the spot's yaw, brings it
+        LOWER_M above the spot, lowers it with physics until it touches what it is put on (or reaches the spot),
+        lets go, and the object settles."""
         hand = self.avatar.hand_of(name)
         riders = self.avatar.riders.pop(name, [])
         pos, quat = self.world.object_pose(name)
         rel = {r: relative_pose(pos, quat, *self.world.object_pose(r)) for r in riders}
         target_quat = np.array(yaw_quat(spot.yaw))
+        above = np.array(spot.pos) + np.array([0.0, 0.0, LOWER_M])
         for item in [name, *riders]:
             self.avatar.unweld(item)
-            self.avatar.set_collisions(item, True)
-        self.world.set_object_pose(name, spot.pos, target_quat, forward=False)
+        self.world.set_object_pose(name, above, target_quat, forward=False)
         for rider, (rp, rq) in rel.items():
-            self.world.set_object_pose(rider, *compose(np.array(spot.pos), target_quat, rp, rq), forward=False)
+            self.world.set_object_pose(rider, *compose(above, target_quat, rp, rq), forward=False)
         if hand is not None:
             self.avatar.held[hand] = None
-            self.avatar.set_hand(hand, spot.pos, follow=False)
-        self.world.set_object_pose(name, spot.pos, target_quat)
+            self.avatar.set_hand(hand, above, follow=False)
+        mujoco.mj_kinematics(self.world.model, self.world.data)
+        for item in [name, *riders]:
+            if hand is not None:
+                self.avatar.weld(item, self.avatar.hands[hand])
+            self.avatar.set_collisions(item, True)
+        self.world.set_object_pose(name, above, target_quat)  # at rest, kinematics updated
+        if hand is not None:
+            self._lower(name, hand, above, riders)
+            for item in [name, *riders]:
+                self.avatar.unweld(item)
         self.settle()
         if hand is not None:
             self.avatar.set_hand(hand, self.avatar.hand_home(hand), follow=False)
+
+    def _lower(self, name: str, hand: str, above: np.ndarray, riders: list[str]) -> None:
+        """Move `hand`, holding `name` (welded) from `above`, down LOWER_M (and LOWER_PRESS_M more) with physics,
+        until `name` touches something other than itself, its riders and the hand."""
+        model, data = self.world.model, self.world.data
+        own = {self.world.object_body_ids[self.world.object_index(o)] for o in [name, *riders]} | {
+            self.avatar.hands[hand], self.avatar.root}
+        body = self.world.object_body_ids[self.world.object_index(name)]
+        for k in range(1, LOWER_STEPS + 1):
+            self.avatar.set_hand(hand, above - np.array([0.0, 0.0, (LOWER_M + LOWER_PRESS_M) * k / LOWER_STEPS]),
+                                 follow=False)
+            self.step(LOWER_STEP_PHYSICS)
+            touching = [(a, b) for a, b in model.geom_bodyid[data.contact.geom[: data.ncon]] if body in (a, b)]
+            if any((b if a == body else a) not in own for a, b in touching):
+                return
 
     def ensure_held(self, name: str) -> None:
         if name in self.avatar.worn:

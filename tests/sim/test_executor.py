@@ -8,7 +8,7 @@ import pytest
 from homer_sim.graph import INSIDE
 from homer_sim.person.activities import load_library
 from homer_sim.person.aliases import Resolver
-from homer_sim.person.avatar import add_avatar
+from homer_sim.person.avatar import AvatarError, add_avatar
 from homer_sim.person.executor import Executor
 from homer_sim.person.scripts import symbolic_run
 from homer_sim.world import World
@@ -120,3 +120,55 @@ def test_an_object_in_a_doors_way_is_set_aside_or_pushed_back_in(executor: Execu
     assert world.openness("cupboard/door") < 0.05
     graph = executor.observe()
     assert (graph.parent_of("drinking_glass"), graph.relation_of("drinking_glass")) == ("cupboard", "INSIDE")
+
+
+def test_doors_move_by_force_and_a_jammed_one_is_a_clear_error(executor: Executor) -> None:
+    """The person pushes a door through its joint: a door jammed after a few degrees (its hinge's limit) stops
+    there and opening it says so, where a door whose position was written would have been put open."""
+    executor.start_day(np.random.default_rng(0))
+    model = executor.world.model
+    art = next(a for a in executor.parts["fridge"] if a.joint_type == "hinge")
+    lo, hi = art.range
+    model.jnt_range[art.joint_id] = (lo, lo + 0.05 * (hi - lo))
+    try:
+        with pytest.raises(AvatarError, match="stuck at openness"):
+            executor.open("fridge")
+        assert executor.world.openness("fridge") < 0.1  # at its jam (the limit is soft), not open
+    finally:
+        model.jnt_range[art.joint_id] = (lo, hi)
+    executor.open("fridge")
+    assert executor.world.openness("fridge") > 0.95
+    executor.close("fridge")
+
+
+def test_a_put_down_is_lowered_onto_its_spot_and_let_go_there(executor: Executor) -> None:
+    """Put on the table, a bowl is let go where it touched down: it ends at rest within 1 cm of where it was let
+    go, upright, and was never pushed more than the press depth below its spot."""
+    executor.start_day(np.random.default_rng(0))
+    executor.grab("bowl")
+    hands = executor.hands
+    lows, release = [], hands.release
+
+    def watched(name, spot):
+        step = hands.step
+
+        def tracked(n):
+            step(n)
+            lows.append(executor.world.object_pose(name)[0][2] - spot.pos[2])
+        hands.step = tracked
+        try:
+            release(name, spot)
+        finally:
+            hands.step = step
+            lows.append(spot)
+    hands.release = watched
+    try:
+        executor.put("bowl", "table_dining_room", None)
+    finally:
+        hands.release = release
+    spot = lows.pop()
+    pos, quat = executor.world.object_pose("bowl")
+    assert executor.observer.update().parent_of("bowl") == "table_dining_room"
+    assert np.hypot(*(pos[:2] - np.array(spot.pos[:2]))) < 0.01 and abs(pos[2] - spot.pos[2]) < 0.01
+    assert min(lows) > -0.012 and max(lows[:3]) > 0.005  # lowered from above, never pressed through
+    assert 1 - 2 * (quat[1] ** 2 + quat[2] ** 2) > 0.99  # upright
