@@ -29,7 +29,7 @@ from homer_sim.execution import IN_PROCESS, Backend
 from homer_sim.person.aliases import Resolver
 from homer_sim.person.avatar import add_avatar
 from homer_sim.person.day_scripts import DayScript, read_day_script
-from homer_sim.person.executor import DayLog, Executor
+from homer_sim.person.executor import ActionError, DayLog, Executor
 from homer_sim.person.scripts import ScriptError
 from homer_sim.world import World
 
@@ -94,13 +94,16 @@ class Replayer:
         """Parse a day script with this apartment's names (a ScriptError names file and line of each problem)."""
         return read_day_script(path, self.resolver)
 
-    def live(self, script: DayScript, task: DayTask, after_action: Callable[[int], None] | None = None) -> DayLog:
+    def live(self, script: DayScript, task: DayTask, after_action: Callable[[int], None] | None = None,
+             on_error: Callable[[int, ActionError], None] | None = None) -> DayLog:
         """Live `script` as day `task`: each action at its minute, snapshots every 10 minutes; after_action gets the
-        index of each action once it is done (see `Executor.live`)."""
+        index of each action once it is done, on_error the index and error of an action that failed, and the day
+        goes on (see `Executor.live`; without on_error a failed action ends the day)."""
         self.executor.start_day(np.random.default_rng([SPLITS.index(task.split), task.index]))
         self.executor.log.schedule = [tuple(entry) for entry in script.schedule]
         events = [(a.minute, a.activity, a.action) for a in script.actions]
-        return self.executor.live(events, max(float(DAY_END_MIN), script.end_min), after_action=after_action)
+        return self.executor.live(events, max(float(DAY_END_MIN), script.end_min), after_action=after_action,
+                                  on_error=on_error)
 
     def day(self, task: DayTask) -> Day:
         """Read and live day `task` into our dataset's Day (no DayKey: a replayed day is redone from its script)."""

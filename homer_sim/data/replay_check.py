@@ -9,12 +9,19 @@ For an unpacked upstream `HouseholdX` folder (`scripts_train/NNN.txt` and `scrip
 - after each action, each `<<Graph Changes>>` edge line against our observer: `+ obj REL parent` is seen when
   our object now rests on the parent, `- obj REL parent` when it no longer does (or is in the person's hands).
 
+Names go through the alias table with the authors' VirtualHome ids, so their three kitchen counters map to
+our counters as `aliases.json` says. Unlike `homer replay`, which refuses a day naming something we lack, the check
+lives the rest of such a day: each action naming a thing we lack is left out and counted as `action left out,
+missing object|furniture|scenery: NAME` (scenery: a name the authors' graph does not hold), and so is the grab of
+an object whose put-down was left out (`action left out, its put-down was`), so that it stays where it is rather
+than in the person's hand. The graph change lines of a left-out action are checked after the action before it.
+
 Every disagreement gets one cause: `missing object: NAME` and `missing furniture: NAME` (the authors have it,
 our apartment has no node or alias for it), `different furniture` (the authors have several of that furniture,
 our alias maps them onto one), `start placement differs` (not moved yet today and it starts elsewhere in our
-apartment), `settled elsewhere` (our person moved it and it came to rest on something else), `change not seen
-(+)`/`(-)`. A day that cannot run counts once per name it lacks as `day failed, missing object|furniture|scenery:
-NAME` (scenery: a name the authors' graph does not hold, a light say), or as `day failed: <error type>`.
+apartment), `settled elsewhere` (our person moved it and it came to rest on something else), `not movable here:
+NAME` (a thing we have as fixed), `change not seen (+)`/`(-)`. A day that still cannot run counts as `day failed:
+<error type>`.
 """
 
 from __future__ import annotations
@@ -31,10 +38,13 @@ from tqdm import tqdm
 from homer_sim.data.homer_plus import Household, read_day, read_household, upstream_folder
 from homer_sim.data.replay import DayTask, Replayer, find_day_scripts, short_reason
 from homer_sim.errors import HomerError
-from homer_sim.person.day_scripts import DayScript, GraphChange
-from homer_sim.person.scripts import ScriptError
+from homer_sim.person.day_scripts import DayScript, GraphChange, TimedAction, read_day_script
+from homer_sim.person.executor import ActionError
 
-_UNKNOWN = re.compile(r"unknown name '([^']+)'")
+_ARGUMENT_ID = re.compile(r"<([^<>]*)>\s*\((\d+)\)")
+LACKING = "?"
+"""Prefix of a name we lack in an action's arguments while the check reads a day (no node name starts with it)."""
+PUTS = frozenset({"putback", "putin"})
 KINDS = {"object": "object", "prop": "object", "decor": "object", "furniture": "furniture", "appliance": "furniture"}
 
 
@@ -60,6 +70,7 @@ class HouseholdCheck:
         self.house: Household = read_household(self.folder)
         common = json.loads((self.folder / "common_data.json").read_text())
         self.classes = [common["node_classes"][i] for i in self.house.keep]
+        self.ids = list(self.house.ids)
         self.repeated = {c for c, n in Counter(self.classes).items() if n > 1}
         self.kind_of = {c: KINDS.get(k, "object") for c, k in zip(self.classes, self.house.categories, strict=True)}
         self.replayer = Replayer()
@@ -69,7 +80,57 @@ class HouseholdCheck:
         self.movable = set(self.replayer.world.object_names)
 
     def missing(self, name: str) -> str:
-        return f"missing {self.kind_of.get(name, 'scenery')}: {name}"
+        """The cause for a thing we lack: its kind (by the authors' category) and name."""
+        return f"missing {self.kind_of.get(name.split(' (')[0], 'scenery')}: {name}"
+
+    def label(self, name: str, instance: int | None) -> str:
+        """How a thing we lack is named in causes: with its id when only that instance of the class is lacking."""
+        return f"{name} ({instance})" if instance is not None and self.resolve.knows(name) else name
+
+    def node(self, name: str, instance: int | None = None) -> str | None:
+        """Our node for the authors' `name` with VirtualHome id `instance`, or None."""
+        return self.resolve(name, instance) if self.resolve.knows(name, instance) else None
+
+    def candidates(self, name: str, instance: int | None) -> set[str]:
+        """Our nodes the authors' `name` may be: of its id if known, else of every instance of its class."""
+        instances = [instance] if instance is not None else [k for c, k in zip(self.classes, self.ids, strict=True)
+                                                             if c == name] or [None]
+        return {node for k in instances if (node := self.node(name, k)) is not None}
+
+    def lenient(self, name: str, instance: int | None = None) -> str:
+        """The resolver for reading a day here: a name we lack becomes LACKING + name instead of an error."""
+        if self.resolve.knows(name, instance):
+            return self.resolve(name, instance)
+        return LACKING + self.label(name, instance)
+
+    def runnable(self, script: DayScript, tally: Tally) -> tuple[DayScript, list[list[GraphChange]]]:
+        """The day without the actions naming things we lack (counted in `tally`) and, for each kept action, the
+        change lines to check after it (its own and those of the left-out actions right after it)."""
+        actions = script.actions
+        out = {k for k, a in enumerate(actions) if any(n.startswith(LACKING) for n in a.action.args)}
+        for k in sorted(out):
+            lacking = next(n for n in actions[k].action.args if n.startswith(LACKING))[len(LACKING):]
+            tally.causes[f"action left out, {self.missing(lacking)}"] += 1
+            verb, args = actions[k].action.verb, actions[k].action.args
+            if verb in PUTS and not args[0].startswith(LACKING):
+                grab = next((j for j in range(k - 1, -1, -1) if j not in out and actions[j].action.args[:1] ==
+                             args[:1] and actions[j].action.verb in PUTS | {"grab"}), None)
+                if grab is not None and actions[grab].action.verb == "grab":
+                    out.add(grab)
+                    tally.causes["action left out, its put-down was"] += 1
+        kept: list[TimedAction] = []
+        checks: list[list[GraphChange]] = []
+        early: list[GraphChange] = []  # changes of left-out actions before the first kept one
+        for k, action in enumerate(actions):
+            if k not in out:
+                kept.append(action)
+                checks.append([*early, *action.changes])
+                early = []
+            elif checks:
+                checks[-1].extend(action.changes)
+            else:
+                early.extend(action.changes)
+        return DayScript(script.path, script.schedule, tuple(kept)), checks
 
     def check_day(self, task: DayTask, tally: Tally) -> None:
         """Replay day `task`, compare it with its graph file and add the results to `tally`."""
@@ -78,47 +139,52 @@ class HouseholdCheck:
             raise HomerError(f"{task.path}: no matching graph {graph_path}")
         theirs = read_day(graph_path, self.house, task.household, task.split)
         try:
-            script = self.replayer.read(task.path)
-        except ScriptError as error:
-            names = sorted({m.group(1) for _, reason in error.errors for m in [_UNKNOWN.search(reason)] if m})
-            tally.causes.update(f"day failed, {self.missing(n)}" for n in names)
-            if not names:
-                tally.causes[f"day failed: {type(error).__name__}"] += 1
-            tally.failed[task.label] = short_reason(error)
-            return
-        try:
-            seen = self._live(script, task)
+            script, checks = self.runnable(read_day_script(task.path, self.lenient), tally)
+            if not script.actions:
+                raise HomerError("no action left to run")
+            seen = self._live(script, checks, task)
         except HomerError as error:
             tally.causes[f"day failed: {type(error).__name__}"] += 1
             tally.failed[task.label] = short_reason(error)
             return
         tally.completed += 1
+        tally.causes.update(self.action_failures)
         tally.changes += len(seen)
         tally.seen += sum(ok for ok, _ in seen)
         tally.causes.update(cause for ok, cause in seen if not ok)
         self._compare_steps(theirs.minutes, theirs.parent, tally)
 
-    def _live(self, script: DayScript, task: DayTask) -> list[tuple[bool, str]]:
-        """Live the day; (seen, cause) for each graph change line, checked right after its action."""
+    def _live(self, script: DayScript, checks: list[list[GraphChange]], task: DayTask) -> list[tuple[bool, str]]:
+        """Live the day; (seen, cause) for each graph change line, checked right after its action. An action that
+        fails is counted in `action_failures` by its reason, and the day goes on."""
         results: list[tuple[bool, str]] = []
+        self.action_failures = Counter()
 
         def after(index: int) -> None:
-            changes = script.actions[index].changes
-            if changes:
+            if checks[index]:
                 graph = self.replayer.executor.observe()
                 carried = set(self.replayer.executor.avatar.carried())
-                results.extend(self._seen(change, graph, carried) for change in changes)
+                ids = {n: int(i) for n, i in _ARGUMENT_ID.findall(script.actions[index].action.text)}
+                results.extend(self._seen(change, graph, carried, ids) for change in checks[index])
 
-        self.record = self.replayer.live(script, task, after_action=after)
+        def failed(index: int, error: ActionError) -> None:
+            self.action_failures[f"action failed: {error.reason}"] += 1
+
+        self.record = self.replayer.live(script, task, after_action=after, on_error=failed)
         return results
 
-    def _seen(self, change: GraphChange, graph, carried: set[str]) -> tuple[bool, str]:
-        for name in (change.obj, change.parent):
-            if name not in self.resolve:
-                return False, self.missing(name)
-        obj, parent = self.resolve(change.obj), self.resolve(change.parent)
+    def _seen(self, change: GraphChange, graph, carried: set[str], ids: dict[str, int]) -> tuple[bool, str]:
+        """Whether our graph shows `change`; `ids` are the VirtualHome ids the action wrote (which counter), a class
+        of several pieces without one there may be any of them."""
+        names = (change.obj, change.parent)
+        nodes = [self.candidates(name, ids.get(name)) for name in names]
+        for name, found in zip(names, nodes, strict=True):
+            if not found:
+                return False, self.missing(self.label(name, ids.get(name)))
+        objs, parents = nodes
+        obj = min(objs)
         now = graph.parent_of(obj)
-        ok = now == parent if change.sign == "+" else (now != parent or obj in carried)
+        ok = now in parents if change.sign == "+" else (now not in parents or obj in carried)
         return ok, f"change not seen ({change.sign})"
 
     def _compare_steps(self, minutes: np.ndarray, parents: np.ndarray, tally: Tally) -> None:
@@ -137,31 +203,37 @@ class HouseholdCheck:
                 else:
                     tally.causes[cause] += 1
 
+    def resolve_index(self, i: int) -> str | None:
+        """Our node for the authors' node i (by class and VirtualHome id), or None."""
+        return self.node(self.classes[i], self.ids[i])
+
     def _disagreement(self, i: int, their_parent: int, our_parents: np.ndarray, moved: dict, minute: int
                       ) -> str | None:
         """None when object i rests where the authors have it, else the cause."""
         name, parent = self.classes[i], self.classes[their_parent]
-        for wanted in (name, parent):
-            if wanted not in self.resolve:
-                return self.missing(wanted)
-        obj = self.resolve(name)
+        obj, our_parent = self.resolve_index(i), self.resolve_index(their_parent)
+        for k, node in ((i, obj), (their_parent, our_parent)):
+            if node is None:
+                return self.missing(self.label(self.classes[k], self.ids[k]))
         if obj not in self.movable:
             return f"not movable here: {name}"
-        if self.ours[our_parents[self.our_index[obj]]] == self.resolve(parent):
+        if self.ours[our_parents[self.our_index[obj]]] == our_parent:
             return None
         if parent in self.repeated:
             return "different furniture"
         return "settled elsewhere" if moved.get(obj, np.inf) < minute else "start placement differs"
 
 
-def replay_check(household_dir: str | Path, progress: bool = False) -> dict:
-    """Replay and check every day of an unpacked HOMER+ household folder.
+def replay_check(household_dir: str | Path, progress: bool = False, days: int | None = None) -> dict:
+    """Replay and check every day of an unpacked HOMER+ household folder (the first `days` of them, training days
+    first, when given).
 
     Returns {"days", "days_completed", "agreement" (share of movable object-steps whose parent agrees, None when
     no day completed), "graph_changes_seen" (share of graph change edge lines seen, None without any), "causes"
-    {cause: count} (object-steps, change lines, or failed days for `day failed...`), "failed" {day: reason}}."""
+    {cause: count} (object-steps, change lines, left-out actions, or failed days for `day failed...`), "failed"
+    {day: reason}}."""
     check = HouseholdCheck(household_dir)
-    tasks = find_day_scripts(check.root, check.root.name)
+    tasks = find_day_scripts(check.root, check.root.name)[:days]
     tally = Tally()
     for task in tqdm(tasks, desc="days", unit="day", disable=not progress):
         check.check_day(task, tally)

@@ -110,7 +110,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
 def cmd_replay_check(args: argparse.Namespace) -> int:
     from homer_sim.data.replay_check import replay_check
 
-    result = replay_check(args.household, progress=not args.json)
+    result = replay_check(args.household, progress=not args.json, days=args.days)
 
     def share(x: float | None) -> str:
         return "n/a" if x is None else f"{x:.1%}"
@@ -186,6 +186,8 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
         "processed_seqLM_coarse/) and compares each movable object's parent every 10 minutes, and each <<Graph "
         "Changes>> edge line after its action, with the authors' graphs; disagreements are counted by cause.")
     check.add_argument("household", type=Path, help="the unpacked HouseholdX folder")
+    check.add_argument("--days", type=int, default=None,
+                       help="check only the first N days (training days first, in number order)")
     check.add_argument("--json", action="store_true",
                        help='print {"days", "days_completed", "agreement", "graph_changes_seen", "causes", "failed"}')
     check.set_defaults(func=cmd_replay_check)

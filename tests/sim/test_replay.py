@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import tarfile
 from collections import Counter
 from pathlib import Path
@@ -98,11 +99,11 @@ def test_action_without_minute_and_backwards_time_are_errors() -> None:
         parse_day_script(DAY.replace("482.0", "470.0"), "000.txt", default_resolver())
 
 
-def _household(root: Path, their_bowl_back_at: int) -> Path:
-    """A HOMER+-like household: day train/000 (DAY) and its graph, where the bowl goes from the cupboard onto the
-    table at 08:10 and back into the cupboard at minute `their_bowl_back_at`."""
+def _household(root: Path, their_bowl_back_at: int, day: str = DAY) -> Path:
+    """A HOMER+-like household: day train/000 (`day`) and its graph, where the bowl goes from the cupboard onto
+    the table at 08:10 and back into the cupboard at minute `their_bowl_back_at`."""
     (root / "scripts_train").mkdir(parents=True)
-    (root / "scripts_train" / "000.txt").write_text(DAY)
+    (root / "scripts_train" / "000.txt").write_text(day)
     folder = root / "processed_seqLM_coarse"
     (folder / "train").mkdir(parents=True)
     classes = ["home", "dining_room", "table", "cupboard", "bowl"]
@@ -149,6 +150,23 @@ def test_replay_check_counts_agreement_changes_and_causes(tmp_path: Path) -> Non
                       "causes": {"settled elsewhere": 85, "change not seen (+)": 1}, "failed": {}}
 
 
+@pytest.mark.physics
+def test_replay_check_leaves_out_and_counts_actions_on_things_we_lack(tmp_path: Path) -> None:
+    # The bowl is put on a frying pan we lack: that put-down and the bowl's grab are left out, the bowl stays in
+    # the cupboard and the day goes on. Their bowl is on the table 08:10-09:50 (11 steps); ours never moved.
+    day = DAY.replace("<bowl> (1001) <table> (231)", "<bowl> (1001) <fryingpan> (1117)")
+    result = replay_check(_household(tmp_path / "HouseholdT", 600, day))
+    # Both left-out actions' change lines are checked after the find before them: '- bowl INSIDE cupboard' and
+    # '+ bowl ON table' are not seen there; '+ bowl INSIDE cupboard' after the sit is.
+    assert result == {"days": 1, "days_completed": 1, "agreement": round(98 / 109, 4),
+                      "graph_changes_seen": round(1 / 3, 4),
+                      "causes": {"start placement differs": 11, "action left out, missing scenery: fryingpan": 1,
+                                 "action left out, its put-down was": 1, "change not seen (-)": 1,
+                                 "change not seen (+)": 1}, "failed": {}}
+    with pytest.raises(ScriptError, match="000.txt:19: unknown name 'fryingpan'"):  # homer replay refuses it
+        Replayer().read(tmp_path / "HouseholdT" / "scripts_train" / "000.txt")
+
+
 def test_replay_reports_a_day_that_cannot_run_and_goes_on(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     folder = tmp_path / "scripts_test"
     folder.mkdir()
@@ -163,27 +181,40 @@ def test_replay_reports_a_day_that_cannot_run_and_goes_on(tmp_path: Path, capsys
 
 SHARED = Path(os.environ.get("HOMER_SIM_SHARED", Path(__file__).resolve().parents[3] / "shared")) / "homer_plus"
 ARCHIVE = SHARED / "HouseholdA.tar.gz"
+CACHE = Path(os.environ.get("HOMER_SIM_CACHE", Path.home() / ".cache" / "homer-sim")) / "homer_plus"
+MEMBERS = ["processed_seqLM_coarse/common_data.json", "scripts_train/000.txt", "processed_seqLM_coarse/train/000.pt",
+           "scripts_test/000.txt", "processed_seqLM_coarse/test/000.pt"]
 
 
-@pytest.mark.skipif(not ARCHIVE.is_file(), reason=f"HOMER+ data not found at {SHARED}")
-def test_replay_check_on_two_real_days_names_every_missing_name(tmp_path: Path) -> None:
-    members = ["HouseholdA/processed_seqLM_coarse/common_data.json", "HouseholdA/scripts_train/000.txt",
-               "HouseholdA/processed_seqLM_coarse/train/000.pt", "HouseholdA/scripts_test/000.txt",
-               "HouseholdA/processed_seqLM_coarse/test/000.pt"]
-    with tarfile.open(ARCHIVE) as archive:
-        for member in members:
-            archive.extract(member, tmp_path, filter="data")
+def _real_days(tmp_path: Path) -> Path:
+    """Household A with its first training and test day, from the shared archive or an unpacked copy in the cache
+    (as `homer_sim.data.homer_plus` users unpack it), into tmp_path."""
     folder = tmp_path / "HouseholdA"
+    if ARCHIVE.is_file():
+        with tarfile.open(ARCHIVE) as archive:
+            for member in MEMBERS:
+                archive.extract(f"HouseholdA/{member}", tmp_path, filter="data")
+    else:
+        for member in MEMBERS:
+            (folder / member).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(CACHE / "HouseholdA" / member, folder / member)
+    return folder
+
+
+@pytest.mark.skipif(not ARCHIVE.is_file() and not all((CACHE / "HouseholdA" / m).is_file() for m in MEMBERS),
+                    reason=f"HOMER+ data found neither at {SHARED} nor unpacked at {CACHE}")
+def test_replay_check_on_two_real_days_completes_them_and_counts_every_left_out_action(tmp_path: Path) -> None:
+    folder = _real_days(tmp_path)
     result = replay_check(folder)
+    assert result["days"] == result["days_completed"] == 2 and result["failed"] == {}
+    assert 0 < result["agreement"] < 1 and 0 < result["graph_changes_seen"] < 1
     resolver = default_resolver()
-    lacking = Counter()
+    lacking = Counter()  # per action line naming something we lack: the first such name (with id if only it lacks)
     for script in (folder / "scripts_train" / "000.txt", folder / "scripts_test" / "000.txt"):
-        names = {n for line in script.read_text().splitlines() if line.startswith("[")
-                 for n in re.findall(r"<([^<>]*)>", line)}
-        lacking.update(n for n in names if n not in resolver)
-    assert result["days"] == 2 and result["days_completed"] + len(result["failed"]) == 2
-    if result["failed"]:  # today: toothbrush_holder and more are missing, so no day runs
-        failed_names = Counter({cause.split(": ")[1]: n for cause, n in result["causes"].items()
-                                if cause.startswith("day failed, missing")})
-        assert failed_names == lacking and lacking["toothbrush_holder"] == 2
-        assert all(re.search(r"/\d{3}\.txt:\d+: unknown name '", r) for r in result["failed"].values())
+        for line in script.read_text().splitlines():
+            names = [(n, int(i)) for n, i in re.findall(r"<([^<>]*)> \((\d+)\)", line)] if line[:1] == "[" else []
+            missing = [n if n not in resolver else f"{n} ({i})" for n, i in names if not resolver.knows(n, i)]
+            lacking.update(missing[:1])
+    left_out = Counter({cause.split(": ", 1)[1]: n for cause, n in result["causes"].items()
+                        if cause.startswith("action left out, missing")})
+    assert left_out == lacking and lacking["toothbrush_holder"] >= 2 and lacking["chair (194)"] >= 1
