@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -24,8 +24,13 @@ from homer_sim.clock import DAY_END_MIN
 from homer_sim.data.dataset import SPLITS, DatasetMeta, Day, day_path, write_day, write_meta
 from homer_sim.data.generate import world_meta
 from homer_sim.data.stats import LOG_NAME
-from homer_sim.errors import HomerError
+from homer_sim.errors import HomerError, LayoutError
 from homer_sim.execution import IN_PROCESS, Backend
+from homer_sim.graph import INSIDE, ON
+from homer_sim.home.catalog import CATALOG
+from homer_sim.home.furniture import furniture_geometry
+from homer_sim.home.layout import Layout
+from homer_sim.home.placement import start_poses
 from homer_sim.person.aliases import Resolver
 from homer_sim.person.avatar import add_avatar
 from homer_sim.person.day_scripts import DayScript, read_day_script
@@ -82,11 +87,46 @@ def short_reason(error: HomerError) -> str:
     return f"{type(error).__name__}: {str(error).splitlines()[0]}"
 
 
-class Replayer:
-    """One worker's simulator: a World with an avatar and the person's executor."""
+def start_layout(layout: Layout, parents: Mapping[str, str]) -> tuple[Layout, tuple[str, ...]]:
+    """`layout` with its objects starting on the parents given (object -> furniture or object: INSIDE furniture
+    that has places inside, else ON; ON an object that holds others and is declared before it), each where it
+    fits beside the others (packed as `start_poses` packs the declared layout); the objects keep their order.
+    Returns the layout and the objects left at their declared start: on a room's floor (no spot given), an
+    unknown parent, an object that holds nothing, comes later or stands on another, or no room left there."""
+    furniture = layout.furniture_by_name()
+    objects = {o.name: o for o in layout.objects}
+    order = {name: k for k, name in enumerate(objects)}  # kept: it is the order of the scene graph's nodes
+    left: list[str] = []
+    for name, parent in parents.items():
+        decl = objects.get(name)
+        if decl is None or decl.parent == parent:
+            continue
+        if parent in furniture:
+            relations = {p.relation for p in furniture_geometry(furniture[parent]).places}
+            moved = replace(decl, parent=parent, relation=INSIDE if INSIDE in relations else ON, level=None, at=None)
+        elif parent in objects and CATALOG[objects[parent].cls].supports and order[parent] < order[name] \
+                and objects[parent].parent not in objects and not any(o.parent == name for o in objects.values()):
+            moved = replace(decl, parent=parent, relation=ON, level=None, at=None)
+        else:
+            left.append(name)
+            continue
+        trial = {**objects, name: moved}
+        candidate = replace(layout, objects=tuple(trial.values()))
+        try:
+            start_poses(candidate)
+        except LayoutError:
+            left.append(name)
+            continue
+        objects, layout = trial, candidate
+    return layout, tuple(left)
 
-    def __init__(self, recording=None) -> None:
-        self.world = World(extras=[add_avatar])
+
+class Replayer:
+    """One worker's simulator: a World with an avatar and the person's executor (`layout`: the apartment to
+    build, by default ours)."""
+
+    def __init__(self, recording=None, layout: Layout | None = None) -> None:
+        self.world = World(layout, extras=[add_avatar])
         self.executor = Executor(self.world, recording=recording)
         self.resolver = Resolver(self.world.layout.node_names())
 

@@ -2,10 +2,14 @@
 
 For an unpacked upstream `HouseholdX` folder (`scripts_train/NNN.txt` and `scripts_test/NNN.txt` produced
 `processed_seqLM_coarse/train/NNN.pt` and `test/NNN.pt`), each day script is replayed physically
-(`homer_sim.data.replay`) and compared with the authors' graph (read as `homer_sim.data.homer_plus` reads it):
+(`homer_sim.data.replay`) and compared with the authors' graph (read as `homer_sim.data.homer_plus` reads it).
+The day starts from the authors' arrangement at its first step: each object we have starts on our counterpart of
+the authors' parent where it fits (`start_layout`; what stands on a room's floor, in a knife block, or does not
+fit there starts where our apartment declares it, and counts as `start placement differs` until moved).
 
 - every 10 minutes, each movable object's parent in our observed graph against the authors' parent, both through
-  the alias table (`homer_sim.person.aliases`): `agreement` is the share of object-steps that agree;
+  the alias table (`homer_sim.person.aliases`): `agreement` is the share of object-steps that agree,
+  `agreement_known` the share among the object-steps whose object and parent we have;
 - after each action, each `<<Graph Changes>>` edge line against our observer: `+ obj REL parent` is seen when
   our object now rests on the parent, `- obj REL parent` when it no longer does (or is in the person's hands).
 
@@ -36,8 +40,10 @@ import numpy as np
 from tqdm import tqdm
 
 from homer_sim.data.homer_plus import Household, read_day, read_household, upstream_folder
-from homer_sim.data.replay import DayTask, Replayer, find_day_scripts, short_reason
+from homer_sim.data.replay import DayTask, Replayer, find_day_scripts, short_reason, start_layout
 from homer_sim.errors import HomerError
+from homer_sim.home.apartment import default_layout
+from homer_sim.person.aliases import Resolver
 from homer_sim.person.day_scripts import DayScript, GraphChange, TimedAction, read_day_script
 from homer_sim.person.executor import ActionError
 
@@ -45,6 +51,8 @@ _ARGUMENT_ID = re.compile(r"<([^<>]*)>\s*\((\d+)\)")
 LACKING = "?"
 """Prefix of a name we lack in an action's arguments while the check reads a day (no node name starts with it)."""
 PUTS = frozenset({"putback", "putin"})
+MISSING = "missing "
+"""How the causes of things we lack begin."""
 KINDS = {"object": "object", "prop": "object", "decor": "object", "furniture": "furniture", "appliance": "furniture"}
 
 
@@ -54,8 +62,10 @@ class Tally:
 
     steps: int = 0
     agree: int = 0
+    known_steps: int = 0  # object-steps whose object and authors' parent both map to ours
     changes: int = 0
     seen: int = 0
+    known_changes: int = 0  # change lines whose object and parent both map to ours
     completed: int = 0
     causes: Counter = field(default_factory=Counter)
     failed: dict = field(default_factory=dict)
@@ -73,15 +83,29 @@ class HouseholdCheck:
         self.ids = list(self.house.ids)
         self.repeated = {c for c, n in Counter(self.classes).items() if n > 1}
         self.kind_of = {c: KINDS.get(k, "object") for c, k in zip(self.classes, self.house.categories, strict=True)}
-        self.replayer = Replayer()
-        self.resolve = self.replayer.resolver
-        self.ours = self.replayer.executor.nodes
+        self.layout = default_layout()
+        self.resolve = Resolver(self.layout.node_names())
+        self.ours = self.layout.node_names()
         self.our_index = {name: k for k, name in enumerate(self.ours)}
-        self.movable = set(self.replayer.world.object_names)
+        self.movable = {o.name for o in self.layout.objects}
+        self._replayers: dict[tuple, Replayer] = {}
+
+    def replayer_for(self, start: np.ndarray) -> Replayer:
+        """A replayer of our apartment with the objects starting where the authors' graph row `start` has them
+        (through the alias table, where they fit; see `start_layout`), one per distinct start."""
+        key = tuple(int(p) for p in start)
+        if key not in self._replayers:
+            parents = {}
+            for i in np.flatnonzero(self.house.movable):
+                obj, parent = self.resolve_index(i), self.resolve_index(int(start[i]))
+                if obj in self.movable and parent is not None:
+                    parents[obj] = parent
+            self._replayers[key] = Replayer(layout=start_layout(self.layout, parents)[0])
+        return self._replayers[key]
 
     def missing(self, name: str) -> str:
         """The cause for a thing we lack: its kind (by the authors' category) and name."""
-        return f"missing {self.kind_of.get(name.split(' (')[0], 'scenery')}: {name}"
+        return f"{MISSING}{self.kind_of.get(name.split(' (')[0], 'scenery')}: {name}"
 
     def label(self, name: str, instance: int | None) -> str:
         """How a thing we lack is named in causes: with its id when only that instance of the class is lacking."""
@@ -138,6 +162,7 @@ class HouseholdCheck:
         if not graph_path.is_file():
             raise HomerError(f"{task.path}: no matching graph {graph_path}")
         theirs = read_day(graph_path, self.house, task.household, task.split)
+        self.replayer = self.replayer_for(theirs.parent[0])
         try:
             script, checks = self.runnable(read_day_script(task.path, self.lenient), tally)
             if not script.actions:
@@ -151,6 +176,7 @@ class HouseholdCheck:
         tally.causes.update(self.action_failures)
         tally.changes += len(seen)
         tally.seen += sum(ok for ok, _ in seen)
+        tally.known_changes += sum(ok or not cause.startswith(MISSING) for ok, cause in seen)
         tally.causes.update(cause for ok, cause in seen if not ok)
         self._compare_steps(theirs.minutes, theirs.parent, tally)
 
@@ -198,6 +224,7 @@ class HouseholdCheck:
             for i in np.flatnonzero(self.house.movable):
                 tally.steps += 1
                 cause = self._disagreement(i, int(parents[step, i]), ours[int(minute)], moved, int(minute))
+                tally.known_steps += cause is None or not cause.startswith(MISSING)
                 if cause is None:
                     tally.agree += 1
                 else:
@@ -229,7 +256,9 @@ def replay_check(household_dir: str | Path, progress: bool = False, days: int | 
     first, when given).
 
     Returns {"days", "days_completed", "agreement" (share of movable object-steps whose parent agrees, None when
-    no day completed), "graph_changes_seen" (share of graph change edge lines seen, None without any), "causes"
+    no day completed), "graph_changes_seen" (share of graph change edge lines seen, None without any),
+    "agreement_known" and "graph_changes_seen_known" (the same over the object-steps and lines whose object and
+    parent we have: what the replay gets right of what it can represent), "causes"
     {cause: count} (object-steps, change lines, left-out actions, or failed days for `day failed...`), "failed"
     {day: reason}}."""
     check = HouseholdCheck(household_dir)
@@ -237,7 +266,11 @@ def replay_check(household_dir: str | Path, progress: bool = False, days: int | 
     tally = Tally()
     for task in tqdm(tasks, desc="days", unit="day", disable=not progress):
         check.check_day(task, tally)
-    return {"days": len(tasks), "days_completed": tally.completed,
-            "agreement": round(tally.agree / tally.steps, 4) if tally.steps else None,
-            "graph_changes_seen": round(tally.seen / tally.changes, 4) if tally.changes else None,
+    def share(part: int, whole: int) -> float | None:
+        return round(part / whole, 4) if whole else None
+
+    return {"days": len(tasks), "days_completed": tally.completed, "agreement": share(tally.agree, tally.steps),
+            "graph_changes_seen": share(tally.seen, tally.changes),
+            "agreement_known": share(tally.agree, tally.known_steps),
+            "graph_changes_seen_known": share(tally.seen, tally.known_changes),
             "causes": dict(tally.causes.most_common()), "failed": tally.failed}

@@ -15,8 +15,11 @@ import pytest
 import torch
 
 from homer_sim.data.dataset import Dataset
-from homer_sim.data.replay import Replayer, find_day_scripts, replay
+from homer_sim.data.replay import Replayer, find_day_scripts, replay, start_layout
 from homer_sim.data.replay_check import replay_check
+from homer_sim.graph import INSIDE, ON
+from homer_sim.home.apartment import default_layout
+from homer_sim.home.placement import start_poses
 from homer_sim.person.aliases import default_resolver
 from homer_sim.person.day_scripts import GraphChange, parse_day_script
 from homer_sim.person.scripts import ScriptError
@@ -146,7 +149,8 @@ def test_replay_check_counts_agreement_changes_and_causes(tmp_path: Path) -> Non
     # 109 authors' steps of one movable bowl: 06:00-08:00 in the cupboard and 08:10-09:50 on the table agree
     # (13 + 11); from 10:00 the authors put it back into the cupboard, ours stayed where the person set it down.
     assert result == {"days": 1, "days_completed": 1, "agreement": round(24 / 109, 4),
-                      "graph_changes_seen": round(2 / 3, 4),
+                      "graph_changes_seen": round(2 / 3, 4), "agreement_known": round(24 / 109, 4),
+                      "graph_changes_seen_known": round(2 / 3, 4),
                       "causes": {"settled elsewhere": 85, "change not seen (+)": 1}, "failed": {}}
 
 
@@ -159,12 +163,28 @@ def test_replay_check_leaves_out_and_counts_actions_on_things_we_lack(tmp_path: 
     # Both left-out actions' change lines are checked after the find before them: '- bowl INSIDE cupboard' and
     # '+ bowl ON table' are not seen there; '+ bowl INSIDE cupboard' after the sit is.
     assert result == {"days": 1, "days_completed": 1, "agreement": round(98 / 109, 4),
-                      "graph_changes_seen": round(1 / 3, 4),
+                      "graph_changes_seen": round(1 / 3, 4), "agreement_known": round(98 / 109, 4),
+                      "graph_changes_seen_known": round(1 / 3, 4),
                       "causes": {"start placement differs": 11, "action left out, missing scenery: fryingpan": 1,
                                  "action left out, its put-down was": 1, "change not seen (-)": 1,
                                  "change not seen (+)": 1}, "failed": {}}
     with pytest.raises(ScriptError, match="000.txt:19: unknown name 'fryingpan'"):  # homer replay refuses it
         Replayer().read(tmp_path / "HouseholdT" / "scripts_train" / "000.txt")
+
+
+def test_start_layout_moves_objects_to_the_parents_given_where_they_can_stand() -> None:
+    layout = default_layout()
+    moved, left = start_layout(layout, {"bowl": "table_dining_room", "spoon": "bowl", "milk": "cupboard",
+                                        "knife": "knifeblock", "mail": "outside", "book": "no_such_thing"})
+    starts = {o.name: (o.parent, o.relation) for o in moved.objects}
+    assert starts["bowl"] == ("table_dining_room", ON) and starts["spoon"] == ("bowl", ON)
+    assert starts["milk"] == ("cupboard", INSIDE)
+    # a knife block holds nothing on it, a room's floor needs a spot: they stay where our apartment has them
+    assert set(left) == {"knife", "mail", "book"}
+    declared = {o.name: (o.parent, o.relation) for o in layout.objects}
+    assert all(starts[name] == declared[name] for name in left)
+    assert moved.node_names() == layout.node_names()  # the scene graph's node order is kept
+    assert set(start_poses(moved)) == set(declared)
 
 
 def test_replay_reports_a_day_that_cannot_run_and_goes_on(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
