@@ -24,7 +24,8 @@ Every disagreement gets one cause: `missing object: NAME` and `missing furniture
 our apartment has no node or alias for it), `different furniture` (the authors have several of that furniture,
 our alias maps them onto one), `start placement differs` (not moved yet today and it starts elsewhere in our
 apartment), `settled elsewhere` (our person moved it and it came to rest on something else), `not movable here:
-NAME` (a thing we have as fixed), `change not seen (+)`/`(-)`. A day that still cannot run counts as `day failed:
+NAME` (a thing we have as fixed), `change not seen (+)`/`(-)` (with `, its action left out` for the lines of an
+action left out). A day that still cannot run counts as `day failed:
 <error type>`.
 """
 
@@ -88,6 +89,7 @@ class HouseholdCheck:
         self.ours = self.layout.node_names()
         self.our_index = {name: k for k, name in enumerate(self.ours)}
         self.movable = {o.name for o in self.layout.objects}
+        self.rooms = set(self.layout.room_names())
         self._replayers: dict[tuple, Replayer] = {}
 
     def replayer_for(self, start: np.ndarray) -> Replayer:
@@ -127,9 +129,10 @@ class HouseholdCheck:
             return self.resolve(name, instance)
         return LACKING + self.label(name, instance)
 
-    def runnable(self, script: DayScript, tally: Tally) -> tuple[DayScript, list[list[GraphChange]]]:
+    def runnable(self, script: DayScript, tally: Tally) -> tuple[DayScript, list[list[tuple[GraphChange, bool]]]]:
         """The day without the actions naming things we lack (counted in `tally`) and, for each kept action, the
-        change lines to check after it (its own and those of the left-out actions right after it)."""
+        change lines to check after it: its own and those of the left-out actions right after it, as (change,
+        whether its action was left out)."""
         actions = script.actions
         out = {k for k, a in enumerate(actions) if any(n.startswith(LACKING) for n in a.action.args)}
         for k in sorted(out):
@@ -143,17 +146,17 @@ class HouseholdCheck:
                     out.add(grab)
                     tally.causes["action left out, its put-down was"] += 1
         kept: list[TimedAction] = []
-        checks: list[list[GraphChange]] = []
-        early: list[GraphChange] = []  # changes of left-out actions before the first kept one
+        checks: list[list[tuple[GraphChange, bool]]] = []
+        early: list[tuple[GraphChange, bool]] = []  # changes of left-out actions before the first kept one
         for k, action in enumerate(actions):
             if k not in out:
                 kept.append(action)
-                checks.append([*early, *action.changes])
+                checks.append([*early, *((change, False) for change in action.changes)])
                 early = []
             elif checks:
-                checks[-1].extend(action.changes)
+                checks[-1].extend((change, True) for change in action.changes)
             else:
-                early.extend(action.changes)
+                early.extend((change, True) for change in action.changes)
         return DayScript(script.path, script.schedule, tuple(kept)), checks
 
     def check_day(self, task: DayTask, tally: Tally) -> None:
@@ -180,7 +183,8 @@ class HouseholdCheck:
         tally.causes.update(cause for ok, cause in seen if not ok)
         self._compare_steps(theirs.minutes, theirs.parent, tally)
 
-    def _live(self, script: DayScript, checks: list[list[GraphChange]], task: DayTask) -> list[tuple[bool, str]]:
+    def _live(self, script: DayScript, checks: list[list[tuple[GraphChange, bool]]], task: DayTask
+              ) -> list[tuple[bool, str]]:
         """Live the day; (seen, cause) for each graph change line, checked right after its action. An action that
         fails is counted in `action_failures` by its reason, and the day goes on."""
         results: list[tuple[bool, str]] = []
@@ -188,10 +192,18 @@ class HouseholdCheck:
 
         def after(index: int) -> None:
             if checks[index]:
-                graph = self.replayer.executor.observe()
-                carried = set(self.replayer.executor.avatar.carried())
+                executor = self.replayer.executor
+                graph = executor.observe()
+                carried = set(executor.avatar.carried())
+                person_room = self.layout.room_at(executor.avatar.x, executor.avatar.y)
                 ids = {n: int(i) for n, i in _ARGUMENT_ID.findall(script.actions[index].action.text)}
-                results.extend(self._seen(change, graph, carried, ids) for change in checks[index])
+                for change, left_out in checks[index]:
+                    moved_within = any(c.sign == "+" and (c.obj, c.parent) == (change.obj, change.parent)
+                                       for c, _ in checks[index]) and change.sign == "-"
+                    ok, cause = self._seen(change, graph, carried, person_room, ids, moved_within)
+                    if not ok and left_out and not cause.startswith(MISSING):
+                        cause = f"{cause}, its action left out"
+                    results.append((ok, cause))
 
         def failed(index: int, error: ActionError) -> None:
             self.action_failures[f"action failed: {error.reason}"] += 1
@@ -199,19 +211,37 @@ class HouseholdCheck:
         self.record = self.replayer.live(script, task, after_action=after, on_error=failed)
         return results
 
-    def _seen(self, change: GraphChange, graph, carried: set[str], ids: dict[str, int]) -> tuple[bool, str]:
-        """Whether our graph shows `change`; `ids` are the VirtualHome ids the action wrote (which counter), a class
-        of several pieces without one there may be any of them."""
+    def _seen(self, change: GraphChange, graph, carried: set[str], person_room: str | None, ids: dict[str, int],
+              moved_within: bool) -> tuple[bool, str]:
+        """Whether our graph shows `change`. `ids` are the VirtualHome ids the action wrote (which counter): a
+        class of several pieces without one there may be any of them; `moved_within`: a `-` line whose object
+        the block also adds to that class, so it left another piece than the one the action names. A line on a
+        room (VirtualHome keeps every object INSIDE its room as well) is judged by the room our object is in:
+        the person's while it is carried."""
         names = (change.obj, change.parent)
         nodes = [self.candidates(name, ids.get(name)) for name in names]
+        if moved_within and ids.get(change.parent) is not None:
+            nodes[1] = self.candidates(change.parent, None) - {self.node(change.parent, ids[change.parent])}
         for name, found in zip(names, nodes, strict=True):
             if not found:
                 return False, self.missing(self.label(name, ids.get(name)))
         objs, parents = nodes
         obj = min(objs)
-        now = graph.parent_of(obj)
-        ok = now in parents if change.sign == "+" else (now not in parents or obj in carried)
+        if parents <= self.rooms:
+            now = person_room if obj in carried else self.room_of(graph, obj)
+            ok = (now in parents) == (change.sign == "+")
+        else:
+            now = graph.parent_of(obj)
+            ok = now in parents if change.sign == "+" else (now not in parents or obj in carried)
         return ok, f"change not seen ({change.sign})"
+
+    def room_of(self, graph, node: str) -> str | None:
+        """The room `node` is in, by its parents in `graph`."""
+        for _ in range(len(self.ours)):
+            if node is None or node in self.rooms:
+                return node
+            node = graph.parent_of(node)
+        return None
 
     def _compare_steps(self, minutes: np.ndarray, parents: np.ndarray, tally: Tally) -> None:
         ours = {m: p for m, p in zip(self.record.minutes, self.record.parents, strict=True)}
