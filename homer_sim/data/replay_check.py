@@ -22,11 +22,11 @@ than in the person's hand. The graph change lines of a left-out action are check
 
 Every disagreement gets one cause: `missing object: NAME` and `missing furniture: NAME` (the authors have it,
 our apartment has no node or alias for it), `different furniture` (the authors have several of that furniture,
-our alias maps them onto one), `start placement differs` (not moved yet today and it starts elsewhere in our
-apartment), `settled elsewhere` (our person moved it and it came to rest on something else), `not movable here:
-NAME` (a thing we have as fixed), `change not seen (+)`/`(-)` (with `, its action left out` for the lines of an
-action left out). A day that still cannot run counts as `day failed:
-<error type>`.
+our alias maps them onto one), `in that room, on furniture here` (the authors have it in a room on nothing they
+track, ours stands on furniture in that room), `start placement differs` (not moved yet today and it starts
+elsewhere in our apartment), `settled elsewhere` (our person moved it and it came to rest on something else),
+`not movable here: NAME` (a thing we have as fixed), `change not seen (+)`/`(-)` (with `, its action left out`
+for the lines of an action left out). A day that still cannot run counts as `day failed: <error type>`.
 """
 
 from __future__ import annotations
@@ -264,6 +264,14 @@ class HouseholdCheck:
         """Our node for the authors' node i (by class and VirtualHome id), or None."""
         return self.node(self.classes[i], self.ids[i])
 
+    def _room_at_step(self, our_parents: np.ndarray, k: int) -> str | None:
+        """The room our node k is in, by the parent indices of one step."""
+        for _ in range(len(self.ours)):
+            if k < 0 or self.ours[k] in self.rooms:
+                return None if k < 0 else self.ours[k]
+            k = int(our_parents[k])
+        return None
+
     def _disagreement(self, i: int, their_parent: int, our_parents: np.ndarray, moved: dict, minute: int
                       ) -> str | None:
         """None when object i rests where the authors have it, else the cause."""
@@ -276,6 +284,8 @@ class HouseholdCheck:
             return f"not movable here: {name}"
         if self.ours[our_parents[self.our_index[obj]]] == our_parent:
             return None
+        if our_parent in self.rooms and self._room_at_step(our_parents, self.our_index[obj]) == our_parent:
+            return "in that room, on furniture here"
         if parent in self.repeated:
             return "different furniture"
         return "settled elsewhere" if moved.get(obj, np.inf) < minute else "start placement differs"
