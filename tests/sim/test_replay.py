@@ -104,25 +104,72 @@ def test_action_without_minute_and_backwards_time_are_errors() -> None:
         parse_day_script(DAY.replace("482.0", "470.0"), "000.txt", default_resolver())
 
 
-def _household(root: Path, their_bowl_back_at: int, day: str = DAY) -> Path:
-    """A HOMER+-like household: day train/000 (`day`) and its graph, where the bowl goes from the cupboard onto
-    the table at 08:10 and back into the cupboard at minute `their_bowl_back_at`."""
+def _write_household(root: Path, day: str, nodes: list[tuple[str, int, str, int]], moves: list[tuple[int, int]]
+                     ) -> Path:
+    """A HOMER+-like household at `root`: day train/000 (`day`) and its graph. nodes: (class, id, category, parent
+    index) with home first and the one movable object last; furniture is static. moves: (from minute, parent
+    index) of the object."""
     (root / "scripts_train").mkdir(parents=True)
     (root / "scripts_train" / "000.txt").write_text(day)
     folder = root / "processed_seqLM_coarse"
     (folder / "train").mkdir(parents=True)
-    classes = ["home", "dining_room", "table", "cupboard", "bowl"]
-    common = {"node_ids": [1, 11, 231, 100, 1001], "node_classes": classes, "dt": 10, "static_nodes": [231, 100],
-              "node_categories": ["Home", "Rooms", "Furniture", "Furniture", "placable_objects"],
+    common = {"node_ids": [n[1] for n in nodes], "node_classes": [n[0] for n in nodes], "dt": 10,
+              "static_nodes": [n[1] for n in nodes if n[2] == "Furniture"], "node_categories": [n[2] for n in nodes],
               "activities": ["breakfast", "watching_tv"]}
     (folder / "common_data.json").write_text(json.dumps(common))
     times = torch.arange(360, 1441, 10, dtype=torch.float32)
-    parents = torch.tensor([0, 0, 1, 1, 3]).repeat(len(times), 1)
-    parents[(times >= 490) & (times < their_bowl_back_at), 4] = 2
-    edges = torch.nn.functional.one_hot(parents, 5).float()
+    parents = torch.tensor([n[3] for n in nodes]).repeat(len(times), 1)
+    for minute, parent in moves:
+        parents[times >= minute, len(nodes) - 1] = parent
+    edges = torch.nn.functional.one_hot(parents, len(nodes)).float()
     torch.save({"edges": edges, "times": times, "activity": torch.zeros(len(times), dtype=torch.long)},
                folder / "train" / "000.pt")
     return root
+
+
+def _household(root: Path, their_bowl_back_at: int, day: str = DAY) -> Path:
+    """Day train/000 (`day`) and its graph, where the bowl goes from the cupboard onto the table at 08:10 and back
+    into the cupboard at minute `their_bowl_back_at`."""
+    nodes = [("home", 1, "Home", 0), ("dining_room", 11, "Rooms", 0), ("table", 231, "Furniture", 1),
+             ("cupboard", 100, "Furniture", 1), ("bowl", 1001, "placable_objects", 3)]
+    return _write_household(root, day, nodes, [(490, 2), (their_bowl_back_at, 3)])
+
+
+TABLES = """breakfast (08:00 - 10:00)
+
+### breakfast-00.txt
+
+[GRAB] <bowl> (1001) [1]
+480.0
+<<Graph Changes>>
+   - bowl INSIDE cupboard
+
+[PUTBACK] <bowl> (1001) <table> (114) [2]
+482.0
+<<Graph Changes>>
+   + bowl ON table
+
+[GRAB] <bowl> (1001) [3]
+592.0
+[PUTBACK] <bowl> (1001) <table> (270) [4]
+595.0
+<<Graph Changes>>
+   - bowl ON table
+   + bowl ON table
+"""
+
+
+@pytest.mark.physics
+def test_replay_check_tells_the_authors_tables_apart_by_id(tmp_path: Path) -> None:
+    # Their tables 114 and 270 are our dining-room and home-office ones (aliases.json): the bowl goes cupboard ->
+    # 114 at 08:02 -> 270 at 09:55, ours the same, so every step agrees; the last block's '- bowl ON table' is
+    # the table it left (114), not the one the action names, and is seen too.
+    nodes = [("home", 1, "Home", 0), ("dining_room", 41, "Rooms", 0), ("home_office", 241, "Rooms", 0),
+             ("table", 114, "Furniture", 1), ("table", 270, "Furniture", 2), ("cupboard", 117, "Furniture", 1),
+             ("bowl", 1026, "placable_objects", 5)]
+    result = replay_check(_write_household(tmp_path / "HouseholdT", TABLES, nodes, [(490, 3), (600, 4)]))
+    assert result == {"days": 1, "days_completed": 1, "agreement": 1.0, "graph_changes_seen": 1.0,
+                      "agreement_known": 1.0, "graph_changes_seen_known": 1.0, "causes": {}, "failed": {}}
 
 
 @pytest.mark.physics
