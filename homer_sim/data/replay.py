@@ -29,7 +29,7 @@ from homer_sim.execution import IN_PROCESS, Backend
 from homer_sim.graph import INSIDE, ON
 from homer_sim.home.catalog import CATALOG
 from homer_sim.home.furniture import furniture_geometry
-from homer_sim.home.layout import Layout
+from homer_sim.home.layout import Layout, ObjectDecl
 from homer_sim.home.placement import start_poses
 from homer_sim.person.aliases import Resolver
 from homer_sim.person.avatar import add_avatar
@@ -89,13 +89,12 @@ def short_reason(error: HomerError) -> str:
 
 def start_layout(layout: Layout, parents: Mapping[str, str]) -> tuple[Layout, tuple[str, ...]]:
     """`layout` with its objects starting on the parents given (object -> furniture or object: INSIDE furniture
-    that has places inside, else ON; ON an object that holds others and is declared before it), each where it
-    fits beside the others (packed as `start_poses` packs the declared layout); the objects keep their order.
-    Returns the layout and the objects left at their declared start: on a room's floor (no spot given), an
-    unknown parent, an object that holds nothing, comes later or stands on another, or no room left there."""
+    that has places inside, else ON; ON an object that holds others), each where it fits beside the others
+    (packed as `start_poses` packs the declared layout); the objects keep their order. Returns the layout and
+    the objects left at their declared start: on a room's floor (no spot given), an unknown parent, an object
+    that holds nothing or stands on this one, or no room left there."""
     furniture = layout.furniture_by_name()
-    objects = {o.name: o for o in layout.objects}
-    order = {name: k for k, name in enumerate(objects)}  # kept: it is the order of the scene graph's nodes
+    objects = {o.name: o for o in layout.objects}  # their order is kept: it is the scene graph's node order
     left: list[str] = []
     for name, parent in parents.items():
         decl = objects.get(name)
@@ -104,8 +103,7 @@ def start_layout(layout: Layout, parents: Mapping[str, str]) -> tuple[Layout, tu
         if parent in furniture:
             relations = {p.relation for p in furniture_geometry(furniture[parent]).places}
             moved = replace(decl, parent=parent, relation=INSIDE if INSIDE in relations else ON, level=None, at=None)
-        elif parent in objects and CATALOG[objects[parent].cls].supports and order[parent] < order[name] \
-                and objects[parent].parent not in objects and not any(o.parent == name for o in objects.values()):
+        elif parent in objects and CATALOG[objects[parent].cls].supports and name not in _below(objects, parent):
             moved = replace(decl, parent=parent, relation=ON, level=None, at=None)
         else:
             left.append(name)
@@ -119,6 +117,14 @@ def start_layout(layout: Layout, parents: Mapping[str, str]) -> tuple[Layout, tu
             continue
         objects, layout = trial, candidate
     return layout, tuple(left)
+
+
+def _below(objects: Mapping[str, ObjectDecl], name: str) -> list[str]:
+    """`name` and the objects it stands on, one on another, down to furniture or a room."""
+    chain = [name]
+    while objects[chain[-1]].parent in objects and objects[chain[-1]].parent not in chain:
+        chain.append(objects[chain[-1]].parent)
+    return chain
 
 
 class Replayer:

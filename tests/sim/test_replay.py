@@ -228,9 +228,11 @@ def test_replay_check_leaves_out_and_counts_actions_on_things_we_lack(tmp_path: 
 def test_start_layout_moves_objects_to_the_parents_given_where_they_can_stand() -> None:
     layout = default_layout()
     moved, left = start_layout(layout, {"bowl": "table_dining_room", "spoon": "bowl", "milk": "cupboard",
-                                        "knife": "knifeblock", "mail": "outside", "book": "no_such_thing"})
+                                        "trashbag": "trashcan", "knife": "knifeblock", "mail": "outside",
+                                        "book": "no_such_thing"})
     starts = {o.name: (o.parent, o.relation) for o in moved.objects}
     assert starts["bowl"] == ("table_dining_room", ON) and starts["spoon"] == ("bowl", ON)
+    assert starts["trashbag"] == ("trashcan", ON)  # declared before the trash can: placed after it all the same
     assert starts["milk"] == ("cupboard", INSIDE)
     # a knife block holds nothing on it, a room's floor needs a spot: they stay where our apartment has them
     assert set(left) == {"knife", "mail", "book"}
@@ -238,6 +240,7 @@ def test_start_layout_moves_objects_to_the_parents_given_where_they_can_stand() 
     assert all(starts[name] == declared[name] for name in left)
     assert moved.node_names() == layout.node_names()  # the scene graph's node order is kept
     assert set(start_poses(moved)) == set(declared)
+    assert start_layout(layout, {"plate": "bowl", "bowl": "plate"})[1] == ("bowl",)  # not on what stands on it
 
 
 def test_replay_reports_a_day_that_cannot_run_and_goes_on(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
