@@ -6,10 +6,10 @@ Lookup order, names matched in lower case with surrounding spaces ignored:
    writes the id (`<kitchen_counter> (119)`, as the HOMER+ day scripts do). The authors' apartment has several
    pieces of one class where ours has fewer or names them by room; the id tells which one is meant (the ids
    are numbered room by room, and the authors' graphs give each piece's room and what stands on it). Two ids
-   may map onto one node when we have one piece for two of theirs: their kitchen counters 119 (the sink's) and
-   122 (the coffee maker's) are both our left counter, which stands beside our sink and holds our coffee
-   maker; 123 (the stove's) is our right one, beside our stove. null marks an instance we have no counterpart
-   for yet (their bedroom chair, 194): it is unknown even though its class name alone would resolve.
+   may map onto one node when we have one piece for two of theirs: their kitchen counters 122 (the coffee
+   maker's) and 123 (the stove's, with the cutting board and bread) are both our left counter, which holds
+   those; 119 (the sink's) is our right one. null marks an instance we have no counterpart for yet (their
+   bedroom chair, 194): it is unknown even though its class name alone would resolve.
 2. the exact node name;
 3. `aliases` (name -> node): HOMER/VirtualHome names of things we have under another name, mostly class names
    without our instance suffix (`table` -> `table_dining_room`) and other spellings of one thing
