@@ -43,6 +43,7 @@ from tqdm import tqdm
 from homer_sim.data.homer_plus import Household, read_day, read_household, upstream_folder
 from homer_sim.data.replay import DayTask, Replayer, find_day_scripts, short_reason, start_layout
 from homer_sim.errors import HomerError
+from homer_sim.execution import IN_PROCESS, Backend
 from homer_sim.home.apartment import default_layout
 from homer_sim.person.aliases import Resolver
 from homer_sim.person.day_scripts import DayScript, GraphChange, TimedAction, read_day_script
@@ -70,6 +71,13 @@ class Tally:
     completed: int = 0
     causes: Counter = field(default_factory=Counter)
     failed: dict = field(default_factory=dict)
+
+    def add(self, other: Tally) -> None:
+        """Count `other`'s days in too."""
+        for name in ("steps", "agree", "known_steps", "changes", "seen", "known_changes", "completed"):
+            setattr(self, name, getattr(self, name) + getattr(other, name))
+        self.causes.update(other.causes)
+        self.failed.update(other.failed)
 
 
 class HouseholdCheck:
@@ -291,26 +299,37 @@ class HouseholdCheck:
         return "settled elsewhere" if moved.get(obj, np.inf) < minute else "start placement differs"
 
 
-def replay_check(household_dir: str | Path, progress: bool = False, days: int | None = None) -> dict:
+def check_task(check: HouseholdCheck, task: DayTask) -> Tally:
+    """One day of `replay_check` on a worker's HouseholdCheck: the task function of the execution backend."""
+    tally = Tally()
+    check.check_day(task, tally)
+    return tally
+
+
+def replay_check(household_dir: str | Path, progress: bool = False, days: int | None = None,
+                 backend: Backend = IN_PROCESS) -> dict:
     """Replay and check every day of an unpacked HOMER+ household folder (the first `days` of them, training days
-    first, when given).
+    first, when given), the days on `backend` (this process, local processes or Ray tasks).
 
     Returns {"days", "days_completed", "agreement" (share of movable object-steps whose parent agrees, None when
     no day completed), "graph_changes_seen" (share of graph change edge lines seen, None without any),
     "agreement_known" and "graph_changes_seen_known" (the same over the object-steps and lines whose object and
     parent we have: what the replay gets right of what it can represent), "causes"
-    {cause: count} (object-steps, change lines, left-out actions, or failed days for `day failed...`), "failed"
-    {day: reason}}."""
+    {cause: count} (object-steps, change lines, left-out actions, or failed days for `day failed...`; largest
+    first), "failed" {day: reason}}."""
     check = HouseholdCheck(household_dir)
     tasks = find_day_scripts(check.root, check.root.name)[:days]
-    tally = Tally()
-    for task in tqdm(tasks, desc="days", unit="day", disable=not progress):
-        check.check_day(task, tally)
+    total = Tally()
+    with backend.run(check_task, tasks, HouseholdCheck, (str(Path(household_dir).resolve()),), check) as run:
+        for tally in tqdm(run, total=len(tasks), desc="days", unit="day", disable=not progress):
+            total.add(tally)
+
     def share(part: int, whole: int) -> float | None:
         return round(part / whole, 4) if whole else None
 
-    return {"days": len(tasks), "days_completed": tally.completed, "agreement": share(tally.agree, tally.steps),
-            "graph_changes_seen": share(tally.seen, tally.changes),
-            "agreement_known": share(tally.agree, tally.known_steps),
-            "graph_changes_seen_known": share(tally.seen, tally.known_changes),
-            "causes": dict(tally.causes.most_common()), "failed": tally.failed}
+    return {"days": len(tasks), "days_completed": total.completed, "agreement": share(total.agree, total.steps),
+            "graph_changes_seen": share(total.seen, total.changes),
+            "agreement_known": share(total.agree, total.known_steps),
+            "graph_changes_seen_known": share(total.seen, total.known_changes),
+            "causes": dict(sorted(total.causes.items(), key=lambda kv: (-kv[1], kv[0]))),
+            "failed": dict(sorted(total.failed.items()))}
