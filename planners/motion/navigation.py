@@ -38,6 +38,7 @@ NEAR_COST = 4.0  # extra cost per m of path along which a held object sticking o
 CARRY_TURN = 0.6  # m of path over which a base carrying an object turns from its start heading to the way ahead,
 # and at the end from the way ahead to its goal heading (`Navigator.drive_to`)
 SWEEP_STEP = 0.05  # m between the configurations of a carry checked for touching (`Navigator.drive_to`)
+HEADING_STEP = 0.15  # m between the points of a carry whose headings are the way ahead (`_carry_poses`)
 TURN_BACK = 0.5  # m a base carrying an object backs up at most to turn on the spot clear of everything
 IN_THE_WAY = "someone is in the way"  # ends a navigation failure that only `Navigator.others` caused
 
@@ -221,30 +222,33 @@ class Navigator:
             clear = float(radius)
         return clear
 
-    def _turn_spot(self, xy: tuple[float, float], yaw: float, reach: float, grids: tuple
+    def _turn_spot(self, xy: tuple[float, float], yaw: float, reach: float, grids: tuple,
+                   pose_clear: Callable[[float, float, float], bool] | None = None
                    ) -> tuple[tuple[float, float], bool] | None:
         """Where straight behind `xy` (against heading `yaw`, rad; at most TURN_BACK m, the base free all the way
         there) a base whose held object sticks out `reach` m turns best: the nearest point from which it turns on
         the spot touching nothing (True: `reach` from walls, furniture and open doors and drawers), else (False)
         the one furthest from them among those out of the open parts' grown cells (where a path from there starts
         without first snapping to a free cell, which may lie ahead) if any, or None where that is `xy` itself.
-        `grids`: from `_grids`."""
-        still, others, _ = grids
-        base = self.radius + CLEARANCE
+        With `pose_clear` (whether the robot and what it holds touch nothing at base pose x, y, yaw), points where
+        they touch something come last. `grids`: from `_grids`."""
+        still = grids[0]
         parts = self.open_part_rects()
-        hard = self.blocked | others | self._grid([(r, base) for r in parts + self.floor_object_rects()])
+        fixed, moving = parts + self.floor_object_rects(self.exempt), self.others()
         back = np.array([-math.cos(yaw), -math.sin(yaw)])
-        best, best_clear = None, (False, -1.0)
+        best, best_clear = None, (False, False, -1.0)
         for distance in np.arange(0.0, TURN_BACK + 1e-9, self.plan.resolution):
             x, y = np.asarray(xy) + distance * back
             i, j = self.plan.cell(float(x), float(y))
-            if not (0 <= i < hard.shape[0] and 0 <= j < hard.shape[1]) or (hard[i, j] and distance > 0.0):
-                break
+            if not (0 <= i < still.shape[0] and 0 <= j < still.shape[1]) or (
+                    distance > 0.0 and not self._free(np.array([x, y]), self.radius, fixed, moving, [False])):
+                break  # the base's own footprint, as for a base pose (`stand_pose`)
             clear = min([self._clearance((i, j), reach)]
                         + [math.hypot(max(r[0] - x, 0.0, x - r[2]), max(r[1] - y, 0.0, y - r[3])) for r in parts])
-            if clear >= reach - 1e-9:
+            touching = pose_clear is not None and not pose_clear(float(x), float(y), yaw)
+            if clear >= reach - 1e-9 and not touching:
                 return (float(x), float(y)), True
-            rank = (not still[i, j], clear)  # out of the open parts' reach first (a path starts there as it is)
+            rank = (not touching, not still[i, j], clear)  # out of the open parts' reach next (a path starts there)
             if best is None or rank > best_clear:
                 best, best_clear = ((float(x), float(y)), False), rank
         return None if best is None or best[0] == (float(xy[0]), float(xy[1])) else best
@@ -273,7 +277,13 @@ class Navigator:
                  path)]
         if reach > self.radius + CLEARANCE:
             grids = self._grids(reach)
-            first = self._turn_spot(tuple(q0[:2]), yaw0, reach, grids)
+            pose_clear = None
+            if clear is not None:
+                def pose_clear(x: float, y: float, yaw: float) -> bool:
+                    q = tuck.copy()
+                    q[:3] = (x, y, yaw)
+                    return clear(q)
+            first = self._turn_spot(tuple(q0[:2]), yaw0, reach, grids, pose_clear)
             last = self._turn_spot(tuple(goal[:2]), goal[2], reach, grids)
             try:
                 ahead = self.path_to(goal if last is None else (*last[0], goal[2]), reach,
@@ -336,9 +346,11 @@ def _carry_poses(points: list[tuple[float, float]], yaw0: float, goal: tuple[flo
     before it) and drives straight in; without one, the heading is blended into the goal's over the last
     CARRY_TURN m. Each heading is within pi of the one before (the base turns the short way)."""
     pts = [points[0]]
-    for p in points[1:]:
-        if math.dist(p, pts[-1]) > 1e-6:
+    for p in points[1:]:  # points closer than HEADING_STEP to the one before give no heading (a grid cell beside)
+        if math.dist(p, pts[-1]) >= HEADING_STEP:
             pts.append(p)
+    if math.dist(points[-1], pts[-1]) > 1e-6:
+        pts[-1 if len(pts) > 1 else len(pts):] = [points[-1]]
     xy = np.asarray(pts, dtype=float)
     steps = np.diff(xy, axis=0)
     ahead = [math.atan2(d[1], d[0]) for d in steps] or [yaw0]
