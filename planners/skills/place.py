@@ -135,7 +135,7 @@ class Place:
         held_at = self.arm.held_offset(name)
         try:
             self.navigator.drive_to(self.navigator.stand_near(tuple(target[:2])), self.arm.carry(),
-                                    self.arm.held_reach(), **CARRY_MOTION)
+                                    self.arm.held_reach(), **CARRY_MOTION, clear=self.arm.carry_clear())
         except HomerError as error:
             return SkillResult(False, f"place: {error}")
         slip = float(np.linalg.norm(self.arm.held_offset(name) - held_at))
@@ -397,7 +397,7 @@ class Place:
             if ease is None:
                 continue
             try:
-                self.navigator.drive_to(base, posture, reach, **CARRY_MOTION)
+                self.navigator.drive_to(base, posture, reach, **CARRY_MOTION, clear=self.arm.carry_clear())
             except NavigationError:
                 continue
             path = [start.q, *path]
