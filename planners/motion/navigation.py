@@ -30,6 +30,7 @@ NEAR_TURNS = np.radians(np.arange(0, 360, 30))  # rad around an object on the fl
 WAYPOINT_STRIDE = 4  # keep every 4th grid cell of a path
 CLEARANCE = 0.02  # m beyond the robot's footprint radius
 BASE_DISTANCES = (0.55, 0.65, 0.45, 0.75, 0.85)  # m from the grip site to the base centre, horizontally
+FAR_DISTANCES = (0.95, 1.05)  # m, tried after all of those: the arm reaches 1.1 m with a level hand, 1.0 m pitched
 BASE_TURNS = np.radians([0, 15, -15, 30, -30, 45, -45, 60, -60, 75, -75])  # rad off the grasp's approach
 ON_THE_FLOOR = 0.05  # m: an object whose underside is lower than this stands on the floor (the base drives into it)
 FLOOR_MARGIN = 0.03  # m kept beyond such an object's footprint
@@ -379,24 +380,28 @@ def _carry_poses(points: list[tuple[float, float]], yaw0: float, goal: tuple[flo
 def base_candidates(grip_pos: np.ndarray, grip_rot: np.ndarray, previous_xy: np.ndarray | None,
                     reach_in: np.ndarray | None = None) -> list[tuple[float, float, float]]:
     """Base poses (x m, y m, yaw rad) behind a grip pose, facing it: nearest `previous_xy` first, or, without
-    one, straight behind the grasp first (BASE_TURNS, then BASE_DISTANCES order). "Behind" is against the grip
-    x's horizontal part, or against `reach_in` (a horizontal direction, shape (2,) or (3,)) where given."""
+    one, straight behind the grasp first (BASE_TURNS, then BASE_DISTANCES order); then, in the same order, those
+    FAR_DISTANCES away, for where no nearer one is free or reaches. "Behind" is against the grip x's horizontal
+    part, or against `reach_in` (a horizontal direction, shape (2,) or (3,)) where given."""
     approach = grip_rot[:2, 0] if reach_in is None else np.asarray(reach_in, dtype=float)[:2]
     norm = float(np.linalg.norm(approach))
     if norm > 0.3 or previous_xy is None:
         heading = math.atan2(approach[1], approach[0])
     else:
         heading = math.atan2(grip_pos[1] - previous_xy[1], grip_pos[0] - previous_xy[0])
-    poses = []
-    for turn in BASE_TURNS:
-        for distance in BASE_DISTANCES:
-            yaw = heading + float(turn)
-            xy = grip_pos[:2] - distance * np.array([math.cos(yaw), math.sin(yaw)])
-            poses.append((float(xy[0]), float(xy[1]), yaw))
-    if previous_xy is None:
-        return poses
-    return sorted(poses, key=lambda p: float(np.linalg.norm(np.array(p[:2]) - previous_xy)) + 0.2 * abs(
-        (p[2] - heading + math.pi) % (2 * math.pi) - math.pi))
+    ordered = []
+    for distances in (BASE_DISTANCES, FAR_DISTANCES):
+        poses = []
+        for turn in BASE_TURNS:
+            for distance in distances:
+                yaw = heading + float(turn)
+                xy = grip_pos[:2] - distance * np.array([math.cos(yaw), math.sin(yaw)])
+                poses.append((float(xy[0]), float(xy[1]), yaw))
+        if previous_xy is not None:
+            poses.sort(key=lambda p: float(np.linalg.norm(np.array(p[:2]) - previous_xy)) + 0.2 * abs(
+                (p[2] - heading + math.pi) % (2 * math.pi) - math.pi))
+        ordered += poses
+    return ordered
 
 
 def base_z(layout, node: str) -> float:
