@@ -98,8 +98,12 @@ class Helper:
         """Carry out `relocations` (in this order) at grid minute `minute`, where `graph` was observed (movable:
         Shape (N,) bool over its nodes), after those that waited for the person to get out of the way (still on
         their source and not asked for again), then park; returns the routine minute the robot is done (`minute`
-        when there is nothing to do)."""
+        when there is nothing to do). A waiting relocation whose object the person moved meanwhile is not done.
+        """
         asked = {r.obj for r in relocations}
+        for r in self.waiting:
+            if r.obj not in asked and graph.parent_of(r.obj) != r.source:
+                self.refuse(r, minute, f"{IN_THE_WAY} (the person) until {r.obj} was moved")
         relocations = [*(r for r in self.waiting if r.obj not in asked and graph.parent_of(r.obj) == r.source),
                        *relocations]
         self.waiting = []
@@ -116,6 +120,12 @@ class Helper:
         self.log.robot_minutes += spent
         self.event(f"robot done after {spent:.1f} min", minute + spent)
         return minute + spent
+
+    def end_day(self, minute: float) -> None:
+        """The day is over: relocations still waiting for the person to get out of the way are not done."""
+        for r in self.waiting:
+            self.refuse(r, int(minute), f"{IN_THE_WAY} (the person) until the day ended")
+        self.waiting = []
 
     def refuse(self, relocation: Relocation, minute: int, reason: str) -> None:
         """Record `relocation` as not done for `reason`, without acting (the robot cannot attempt it now)."""

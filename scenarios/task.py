@@ -162,6 +162,7 @@ class AssistTask:
         self.ended = minute is None
         self.minute = self.minute if minute is None else minute
         if self.ended:  # the reference's fetches after the last snapshot, counted with what the robot did before
+            self.helper.end_day(self.minute)
             self.reward += self.fetches.credit(self.log.relocations, up_to=np.inf)
 
     def get_reward(self) -> float:

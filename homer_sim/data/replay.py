@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -24,12 +24,17 @@ from homer_sim.clock import DAY_END_MIN
 from homer_sim.data.dataset import SPLITS, DatasetMeta, Day, day_path, write_day, write_meta
 from homer_sim.data.generate import world_meta
 from homer_sim.data.stats import LOG_NAME
-from homer_sim.errors import HomerError
+from homer_sim.errors import HomerError, LayoutError
 from homer_sim.execution import IN_PROCESS, Backend
+from homer_sim.graph import INSIDE, ON
+from homer_sim.home.catalog import CATALOG
+from homer_sim.home.furniture import furniture_geometry
+from homer_sim.home.layout import Layout, ObjectDecl
+from homer_sim.home.placement import start_poses
 from homer_sim.person.aliases import Resolver
 from homer_sim.person.avatar import add_avatar
 from homer_sim.person.day_scripts import DayScript, read_day_script
-from homer_sim.person.executor import DayLog, Executor
+from homer_sim.person.executor import ActionError, DayLog, Executor
 from homer_sim.person.scripts import ScriptError
 from homer_sim.world import World
 
@@ -82,11 +87,52 @@ def short_reason(error: HomerError) -> str:
     return f"{type(error).__name__}: {str(error).splitlines()[0]}"
 
 
-class Replayer:
-    """One worker's simulator: a World with an avatar and the person's executor."""
+def start_layout(layout: Layout, parents: Mapping[str, str]) -> tuple[Layout, tuple[str, ...]]:
+    """`layout` with its objects starting on the parents given (object -> furniture or object: INSIDE furniture
+    that has places inside, else ON; ON an object that holds others), each where it fits beside the others
+    (packed as `start_poses` packs the declared layout); the objects keep their order. Returns the layout and
+    the objects left at their declared start: on a room's floor (no spot given), an unknown parent, an object
+    that holds nothing or stands on this one, or no room left there."""
+    furniture = layout.furniture_by_name()
+    objects = {o.name: o for o in layout.objects}  # their order is kept: it is the scene graph's node order
+    left: list[str] = []
+    for name, parent in parents.items():
+        decl = objects.get(name)
+        if decl is None or decl.parent == parent:
+            continue
+        if parent in furniture:
+            relations = {p.relation for p in furniture_geometry(furniture[parent]).places}
+            moved = replace(decl, parent=parent, relation=INSIDE if INSIDE in relations else ON, level=None, at=None)
+        elif parent in objects and CATALOG[objects[parent].cls].supports and name not in _below(objects, parent):
+            moved = replace(decl, parent=parent, relation=ON, level=None, at=None)
+        else:
+            left.append(name)
+            continue
+        trial = {**objects, name: moved}
+        candidate = replace(layout, objects=tuple(trial.values()))
+        try:
+            start_poses(candidate)
+        except LayoutError:
+            left.append(name)
+            continue
+        objects, layout = trial, candidate
+    return layout, tuple(left)
 
-    def __init__(self, recording=None) -> None:
-        self.world = World(extras=[add_avatar])
+
+def _below(objects: Mapping[str, ObjectDecl], name: str) -> list[str]:
+    """`name` and the objects it stands on, one on another, down to furniture or a room."""
+    chain = [name]
+    while objects[chain[-1]].parent in objects and objects[chain[-1]].parent not in chain:
+        chain.append(objects[chain[-1]].parent)
+    return chain
+
+
+class Replayer:
+    """One worker's simulator: a World with an avatar and the person's executor (`layout`: the apartment to
+    build, by default ours)."""
+
+    def __init__(self, recording=None, layout: Layout | None = None) -> None:
+        self.world = World(layout, extras=[add_avatar])
         self.executor = Executor(self.world, recording=recording)
         self.resolver = Resolver(self.world.layout.node_names())
 
@@ -94,13 +140,16 @@ class Replayer:
         """Parse a day script with this apartment's names (a ScriptError names file and line of each problem)."""
         return read_day_script(path, self.resolver)
 
-    def live(self, script: DayScript, task: DayTask, after_action: Callable[[int], None] | None = None) -> DayLog:
+    def live(self, script: DayScript, task: DayTask, after_action: Callable[[int], None] | None = None,
+             on_error: Callable[[int, ActionError], None] | None = None) -> DayLog:
         """Live `script` as day `task`: each action at its minute, snapshots every 10 minutes; after_action gets the
-        index of each action once it is done (see `Executor.live`)."""
+        index of each action once it is done, on_error the index and error of an action that failed, and the day
+        goes on (see `Executor.live`; without on_error a failed action ends the day)."""
         self.executor.start_day(np.random.default_rng([SPLITS.index(task.split), task.index]))
         self.executor.log.schedule = [tuple(entry) for entry in script.schedule]
         events = [(a.minute, a.activity, a.action) for a in script.actions]
-        return self.executor.live(events, max(float(DAY_END_MIN), script.end_min), after_action=after_action)
+        return self.executor.live(events, max(float(DAY_END_MIN), script.end_min), after_action=after_action,
+                                  on_error=on_error)
 
     def day(self, task: DayTask) -> Day:
         """Read and live day `task` into our dataset's Day (no DayKey: a replayed day is redone from its script)."""

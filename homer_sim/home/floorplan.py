@@ -131,14 +131,17 @@ def inflate(plan: FloorPlan, radius: float) -> np.ndarray:
 
 
 def find_path(blocked: np.ndarray, plan: FloorPlan, start: tuple[float, float], goal: tuple[float, float],
-              extra_blocked: np.ndarray | None = None) -> list[tuple[float, float]] | None:
+              extra_blocked: np.ndarray | None = None, penalty: np.ndarray | None = None,
+              penalty_cost: float = 0.0) -> list[tuple[float, float]] | None:
     """A collision-free path (world (x, y) waypoints, m) from start to goal over free cells of `blocked`
-    (8-connected A*), or None. Start and goal snap to the nearest free cell within 0.5 m."""
+    (8-connected A*), or None. Start and goal snap to the nearest free cell within 0.5 m. Where `penalty` (a
+    boolean grid of the same shape) is given, a step onto one of its cells costs 1 + `penalty_cost` times its
+    length: the path keeps out of them where a detour is shorter than that."""
     grid = blocked if extra_blocked is None else blocked | extra_blocked
     s, g = _nearest_free(grid, plan, start), _nearest_free(grid, plan, goal)
     if s is None or g is None:
         return None
-    cells = _astar(grid, s, g)
+    cells = _astar(grid, s, g, penalty, penalty_cost)
     if cells is None:
         return None
     path = [(plan.origin[0] + (i + 0.5) * plan.resolution, plan.origin[1] + (j + 0.5) * plan.resolution)
@@ -160,7 +163,8 @@ def _nearest_free(grid: np.ndarray, plan: FloorPlan, xy: tuple[float, float]) ->
     return best
 
 
-def _astar(grid: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> list[tuple[int, int]] | None:
+def _astar(grid: np.ndarray, start: tuple[int, int], goal: tuple[int, int], penalty: np.ndarray | None = None,
+           penalty_cost: float = 0.0) -> list[tuple[int, int]] | None:
 
     diagonal = 2 ** 0.5
     moves = [(1, 0, 1.0), (-1, 0, 1.0), (0, 1, 1.0), (0, -1, 1.0),
@@ -188,7 +192,7 @@ def _astar(grid: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> l
                 continue
             if di and dj and (grid[cell[0] + di, cell[1]] or grid[cell[0], cell[1] + dj]):
                 continue  # no corner cutting
-            new = cost[cell] + step
+            new = cost[cell] + (step * (1.0 + penalty_cost) if penalty is not None and penalty[nxt] else step)
             if new < cost.get(nxt, np.inf):
                 cost[nxt], came[nxt] = new, cell
                 heapq.heappush(frontier, (new + heuristic(nxt), nxt))

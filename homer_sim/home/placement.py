@@ -128,7 +128,16 @@ def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
     taken: dict[tuple[str, int], list[tuple]] = {}
     poses: dict[str, StartPose] = {}
     rooms = set(layout.room_names())
-    for decl in layout.objects:
+    declared = {o.name: o for o in layout.objects}
+
+    def depth(decl: ObjectDecl) -> int:  # how many objects it stands on, one on another (bounded for a cycle)
+        k = 0
+        while decl.parent in declared and k <= len(declared):
+            decl, k = declared[decl.parent], k + 1
+        return k
+
+    # what stands on an object is placed after it, whatever the order of declaration
+    for decl in sorted(layout.objects, key=depth):
         cls = CATALOG[decl.cls]
         if decl.parent in rooms:
             if decl.at is None:
@@ -156,7 +165,7 @@ def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
                 break
         else:
             raise LayoutError(f"{decl.name}: does not fit on any place of {f.name} (size {cls.size} m)")
-    return tuple(poses.items())
+    return tuple((o.name, poses[o.name]) for o in layout.objects)
 
 
 def _decl(layout: Layout, name: str) -> ObjectDecl:

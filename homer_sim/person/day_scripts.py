@@ -13,7 +13,7 @@
     ## Brush teeth until 06:13                   comments; `373.0: tooth_paste moved` notes and
                                                  `<<Activity Change>>` markers are ignored too
 
-Verbs and names are read as in `homer_sim.person.scripts` (ids ignored, names resolved by a callable); every
+Verbs and names are read as in `homer_sim.person.scripts` (names resolved with their ids by a callable); every
 problem of a file (an unknown verb or name, a missing minute) is collected into one `ScriptError` naming the
 file and line.
 """

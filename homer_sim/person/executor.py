@@ -256,11 +256,13 @@ class Executor:
         return events, max([DAY_END_MIN] + [end for _, _, end in entries])
 
     def live(self, events, last: float, after_tick: Callable[[int], float] | None = None,
-             end_min: float | None = None, after_action: Callable[[int], None] | None = None) -> DayLog:
+             end_min: float | None = None, after_action: Callable[[int], None] | None = None,
+             on_error: Callable[[int, ActionError], None] | None = None) -> DayLog:
         """Carry out `events`, (routine minute, activity, action) in time order, on a day already started, with a
         snapshot every GRID_MIN minutes up to `last` (rounded up to the grid). after_tick and end_min as in
-        `run_day`; after_action: called with each event's index once it is done."""
-        day = DayRun(self, events, last, end_min, after_action)
+        `run_day`; after_action: called with each event's index once it is done; on_error: called with an
+        event's index and its ActionError when it fails, and the day goes on (without it the error ends the day)."""
+        day = DayRun(self, events, last, end_min, after_action, on_error)
         free_at = -math.inf
         while (minute := day.advance(free_at)) is not None:
             if after_tick is not None:
@@ -274,13 +276,14 @@ class DayRun:
     loop."""
 
     def __init__(self, executor: Executor, events, last: float, end_min: float | None = None,
-                 after_action: Callable[[int], None] | None = None) -> None:
-        """events, last, end_min and after_action as in `Executor.live`; no action is carried out yet."""
+                 after_action: Callable[[int], None] | None = None,
+                 on_error: Callable[[int, ActionError], None] | None = None) -> None:
+        """events, last, end_min, after_action and on_error as in `Executor.live`; no action is carried out yet."""
         self.executor = executor
         grid = range(DAY_START_MIN, int(math.ceil(last / GRID_MIN)) * GRID_MIN + 1, GRID_MIN)
         self.grid = [m for m in grid if end_min is None or m <= end_min]  # routine minutes of the snapshots
         self.ended_early = len(self.grid) < len(grid)  # end_min cut the day short
-        self.after_action = after_action
+        self.after_action, self.on_error = after_action, on_error
         self._pending = iter(enumerate(events))
         self._event = next(self._pending, None)
         self._current: str | None = None
@@ -300,7 +303,12 @@ class DayRun:
             if activity != self._current and executor.recording is not None:
                 executor.recording.log_event(f"{activity} starts", routine_minute=start)
             self._current = activity
-            executor._perform(activity, action)
+            try:
+                executor._perform(activity, action)
+            except ActionError as error:
+                if self.on_error is None:
+                    raise
+                self.on_error(index, error)
             if self.after_action is not None:
                 self.after_action(index)
             self._event = next(self._pending, None)

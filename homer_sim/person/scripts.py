@@ -10,7 +10,8 @@ A script is a list of blocks. `## <min>-<max>` opens a block whose duration rang
     [PutBack] <bowl> <table_dining_room>
 
 Action lines are `[Verb]`, `[Verb] <arg>` or `[Verb] <arg1> <arg2>` (no space needed between `]`, `>` and
-`<`; a VirtualHome instance id such as `<table> (1)` is accepted and ignored). Verbs are case-insensitive.
+`<`; a VirtualHome instance id such as `<table> (114)` is passed to the resolver, which maps the HOMER+ apartment's
+instances and otherwise goes by the name). Verbs are case-insensitive.
 Blank lines, `#` comments (a `#` not followed by another `#`) and annotation lines starting with `+<` or `-<`
 are ignored. Names are resolved to node names by a callable (see `homer_sim.person.aliases.Resolver`).
 
@@ -114,7 +115,7 @@ class Script:
 _NUMBER = r"(\d+(?:\.\d*)?|\.\d+)"
 _HEADER = re.compile(rf"^##\s*{_NUMBER}\s*-\s*{_NUMBER}$")
 _ACTION = re.compile(r"^\[\s*([A-Za-z_]+)\s*\]\s*(.*)$")
-_ARGUMENT = re.compile(r"\s*<([^<>]*)>(?:\s*\(\d+\))?")
+_ARGUMENT = re.compile(r"\s*<([^<>]*)>(?:\s*\((\d+)\))?")
 
 
 def _parse_header(text: str) -> tuple[float, float] | str:
@@ -127,14 +128,15 @@ def _parse_header(text: str) -> tuple[float, float] | str:
     return low, high
 
 
-def _split_arguments(rest: str) -> list[str] | None:
-    """The names between angle brackets of `rest`, or None when something else is there."""
+def _split_arguments(rest: str) -> list[tuple[str, int | None]] | None:
+    """(name between angle brackets, its id or None) for each argument of `rest`, or None when something else
+    is there."""
     names, position = [], 0
     while position < len(rest):
         match = _ARGUMENT.match(rest, position)
         if match is None:
             return None if rest[position:].strip() else names
-        names.append(match.group(1).strip())
+        names.append((match.group(1).strip(), None if match.group(2) is None else int(match.group(2))))
         position = match.end()
     return names
 
@@ -156,9 +158,9 @@ def parse_action(text: str, line: int, resolve: Callable[[str], str], errors: li
         errors.append((line, f"[{match.group(1)}] takes {wanted} argument(s), got {len(names)}"))
         ok = False
     args = []
-    for name in names:
+    for name, instance in names:
         try:
-            args.append(resolve(name))
+            args.append(resolve(name) if instance is None else resolve(name, instance))
         except KeyError as exc:
             errors.append((line, str(exc) if isinstance(exc, HomerError) else f"unknown name {name!r}"))
             ok = False
@@ -169,7 +171,8 @@ def parse_script(text: str, path: str, activity: str, variant: str, resolve: Cal
     """Parse a script file's text. Every problem of the file is collected and raised as one ScriptError.
 
     resolve: maps a name written in the script to a node name, raising KeyError for unknown names (the
-    error's message is reported, so it should list the closest known names).
+    error's message is reported, so it should list the closest known names); called as resolve(name, id) for
+    an argument written with a VirtualHome id, `<table> (114)` (see `homer_sim.person.aliases.Resolver`).
     """
     errors: list[tuple[int, str]] = []
     blocks: list[Block] = []

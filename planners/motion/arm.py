@@ -167,8 +167,16 @@ class Arm:
                     position = self.world.object_pose(self.held)[0]
                     short = position[2] - half_height < surface_z + PASS_OVER
         self.navigator.drive_to(self.navigator.stand_pose(node, tuple(target_xy), reach if short else 0.0), posture,
-                                reach, **(FREE_MOTION if self.held is None else CARRY_MOTION))
+                                reach, **(FREE_MOTION if self.held is None else CARRY_MOTION), clear=self.carry_clear())
         return short
+
+    def carry_clear(self):
+        """Whether a configuration (shape (13,)) keeps the arm and the object in the hand, as it sits there now,
+        clear of the apartment (a function for `Navigator.drive_to`); None with an empty hand."""
+        if self.held is None:
+            return None
+        held = self.held_object(self.held)
+        return lambda q: self.clearance.clear(q, held=held)
 
     def go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float, here_first: bool = False,
                      direct: bool = False) -> tuple[list[np.ndarray], float] | None:

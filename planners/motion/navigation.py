@@ -30,9 +30,17 @@ NEAR_TURNS = np.radians(np.arange(0, 360, 30))  # rad around an object on the fl
 WAYPOINT_STRIDE = 4  # keep every 4th grid cell of a path
 CLEARANCE = 0.02  # m beyond the robot's footprint radius
 BASE_DISTANCES = (0.55, 0.65, 0.45, 0.75, 0.85)  # m from the grip site to the base centre, horizontally
+FAR_DISTANCES = (0.95, 1.05)  # m, tried after all of those: the arm reaches 1.1 m with a level hand, 1.0 m pitched
 BASE_TURNS = np.radians([0, 15, -15, 30, -30, 45, -45, 60, -60, 75, -75])  # rad off the grasp's approach
 ON_THE_FLOOR = 0.05  # m: an object whose underside is lower than this stands on the floor (the base drives into it)
 FLOOR_MARGIN = 0.03  # m kept beyond such an object's footprint
+NEAR_COST = 4.0  # extra cost per m of path along which a held object sticking out past the base would come within
+# its reach of a wall or furniture (`Navigator.path_to`): the carry keeps to the middle of rooms and doorways
+CARRY_TURN = 0.6  # m of path over which a base carrying an object turns from its start heading to the way ahead,
+# and at the end from the way ahead to its goal heading (`Navigator.drive_to`)
+SWEEP_STEP = 0.05  # m between the configurations of a carry checked for touching (`Navigator.drive_to`)
+HEADING_STEP = 0.15  # m between the points of a carry whose headings are the way ahead (`_carry_poses`)
+TURN_BACK = 0.5  # m a base carrying an object backs up at most to turn on the spot clear of everything
 IN_THE_WAY = "someone is in the way"  # ends a navigation failure that only `Navigator.others` caused
 
 
@@ -62,6 +70,7 @@ class Navigator:
         self.half_sizes = np.array([CATALOG[o.cls].size for o in self.layout.objects]) / 2  # (n_objects, 3), m
         self.others: Callable[[], list[tuple[float, float, float, float]]] = list
         self.exempt: frozenset[int] = frozenset()  # objects (indices) base poses may stand next to: the one picked
+        self._near: dict[int, np.ndarray] = {}  # cells within n grid cells of a wall or furniture, by n
 
     def obstacles(self) -> list[tuple[float, float, float, float]]:
         """World rectangles (x0, y0, x1, y1) in m the base must keep out of beyond the floor plan: open doors and
@@ -164,21 +173,35 @@ class Navigator:
         normal = local_to_world(f, np.array([[1.0, 0.0, 0.0]])) - local_to_world(f, np.zeros((1, 3)))
         return normal[0, :2] / np.linalg.norm(normal[0, :2])
 
-    def path_to(self, goal: tuple[float, float, float], reach: float = 0.0) -> list[tuple[float, float]]:
-        """Waypoints (x, y) in m from the base's current position to `goal`, keeping `reach` m (the base, or a
-        carried object held out in front, whichever sticks out further) from open doors and drawers, and the base
-        clear of objects standing on the floor and of `others`."""
-        start = tuple(self.controller.q()[:2])
-        reach, base = max(reach, self.radius), self.radius + CLEARANCE
-        still = self._grid([(r, reach) for r in self.open_part_rects()]
-                           + [(r, base) for r in self.floor_object_rects()])
-        others = self._grid([(r, base) for r in self.others()])
-        path = find_path(self.blocked, self.plan, start, goal[:2], still | others)
+    def path_to(self, goal: tuple[float, float, float], reach: float = 0.0,
+                start: tuple[float, float] | None = None) -> list[tuple[float, float]]:
+        """Waypoints (x, y) in m from `start` (default: the base's current position) to `goal`, keeping `reach` m
+        (the base, or a carried object held out in front, whichever sticks out further) from open doors and
+        drawers, and the base clear of objects standing on the floor and of `others`. Where `reach` sticks out past
+        the base, the path keeps that far from walls and furniture too where it can (NEAR_COST): a base passing
+        them at its own clearance knocked a carried object against a door frame and out of the fingers."""
+        start = tuple(self.controller.q()[:2]) if start is None else start
+        still, others, near = self._grids(reach)
+        path = find_path(self.blocked, self.plan, start, goal[:2], still | others, near, NEAR_COST)
         if path is None:
             blocked = others.any() and find_path(self.blocked, self.plan, start, goal[:2], still) is not None
             raise self._failure(f"no path from {np.round(start, 2).tolist()} to {np.round(goal[:2], 2).tolist()}",
                                 blocked)
         return path
+
+    def _grids(self, reach: float) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """(still, others, near) grids (shape of `blocked`) of a base whose held object sticks out `reach` m:
+        open parts grown by `reach` and floor objects by the base's clearance; `others` by the same; the cells
+        closer than `reach` to a wall or furniture (None where `reach` does not stick out past the base)."""
+        reach, base = max(reach, self.radius), self.radius + CLEARANCE
+        still = self._grid([(r, reach) for r in self.open_part_rects()]
+                           + [(r, base) for r in self.floor_object_rects()])
+        others = self._grid([(r, base) for r in self.others()])
+        near = None
+        if reach > base:
+            cells = int(np.ceil(reach / self.plan.resolution))
+            near = self._near.setdefault(cells, inflate(self.plan, reach))
+        return still, others, near
 
     def _grid(self, grown_by: list[tuple[tuple[float, float, float, float], float]]) -> np.ndarray:
         """The grid cells (shape of `blocked`) of world rectangles (x0, y0, x1, y1, m) each grown by its m."""
@@ -189,20 +212,100 @@ class Navigator:
             cells[max(i0, 0) : i1 + 1, max(j0, 0) : j1 + 1] = True
         return cells
 
+    def _clearance(self, cell: tuple[int, int], reach: float) -> float:
+        """How far (m, in steps of the grid's resolution, at most `reach`) the grid cell `cell` is from every wall
+        and furniture, from the base's own clearance up."""
+        clear = self.radius + CLEARANCE
+        for radius in np.arange(clear + self.plan.resolution, reach + 1e-9, self.plan.resolution):
+            cells = int(np.ceil(radius / self.plan.resolution))
+            if self._near.setdefault(cells, inflate(self.plan, float(radius)))[cell]:
+                break
+            clear = float(radius)
+        return clear
+
+    def _turn_spot(self, xy: tuple[float, float], yaw: float, reach: float, grids: tuple,
+                   pose_clear: Callable[[float, float, float], bool] | None = None
+                   ) -> tuple[tuple[float, float], bool] | None:
+        """Where straight behind `xy` (against heading `yaw`, rad; at most TURN_BACK m, the base free all the way
+        there) a base whose held object sticks out `reach` m turns best: the nearest point from which it turns on
+        the spot touching nothing (True: `reach` from walls, furniture and open doors and drawers), else (False)
+        the one furthest from them among those out of the open parts' grown cells (where a path from there starts
+        without first snapping to a free cell, which may lie ahead) if any, or None where that is `xy` itself.
+        With `pose_clear` (whether the robot and what it holds touch nothing at base pose x, y, yaw), points where
+        they touch something come last. `grids`: from `_grids`."""
+        still = grids[0]
+        parts = self.open_part_rects()
+        fixed, moving = parts + self.floor_object_rects(self.exempt), self.others()
+        back = np.array([-math.cos(yaw), -math.sin(yaw)])
+        best, best_clear = None, (False, False, -1.0)
+        for distance in np.arange(0.0, TURN_BACK + 1e-9, self.plan.resolution):
+            x, y = np.asarray(xy) + distance * back
+            i, j = self.plan.cell(float(x), float(y))
+            if not (0 <= i < still.shape[0] and 0 <= j < still.shape[1]) or (
+                    distance > 0.0 and not self._free(np.array([x, y]), self.radius, fixed, moving, [False])):
+                break  # the base's own footprint, as for a base pose (`stand_pose`)
+            clear = min([self._clearance((i, j), reach)]
+                        + [math.hypot(max(r[0] - x, 0.0, x - r[2]), max(r[1] - y, 0.0, y - r[3])) for r in parts])
+            touching = pose_clear is not None and not pose_clear(float(x), float(y), yaw)
+            if clear >= reach - 1e-9 and not touching:
+                return (float(x), float(y)), True
+            rank = (not touching, not still[i, j], clear)  # out of the open parts' reach next (a path starts there)
+            if best is None or rank > best_clear:
+                best, best_clear = ((float(x), float(y)), False), rank
+        return None if best is None or best[0] == (float(xy[0]), float(xy[1])) else best
+
     def drive_to(self, goal: tuple[float, float, float], tuck: np.ndarray, reach: float = 0.0,
-                 speed: float = SPEED_FRACTION, ramp: float | None = None) -> float:
+                 speed: float = SPEED_FRACTION, ramp: float | None = None,
+                 clear: Callable[[np.ndarray], bool] | None = None) -> float:
         """Drive the base to `goal` (x m, y m, yaw rad) with the torso and arm at `tuck` (shape (13,)), keeping
         `reach` m from open doors (see `path_to`), every joint's peak speed at `speed` of its limit (cruising with
-        `ramp`, see `Controller.move_through`); returns the path length in m."""
+        `ramp`, see `Controller.move_through`); returns the path length in m. The base turns to the goal heading
+        during the first half of the way. Where `reach` sticks out past the base (an object held out in front),
+        it may face the way ahead instead, so that the object leads through doorways rather than sticking out
+        sideways (`_carry_poses`): it first backs straight out to where it turns best (`_turn_spot`), and at the
+        end reaches the goal heading at such a spot straight behind the goal and drives straight in. With `clear`
+        (whether a configuration, shape (13,), keeps the arm and the held object clear of the apartment), of
+        these two ways and a third (the start heading kept, turned to the goal's over the last CARRY_TURN m) the
+        one whose poses, checked every SWEEP_STEP m (or rad at the held object's reach), touch something least
+        often is taken (in that order on a tie); without it, facing ahead where the way is longer than 2
+        CARRY_TURN."""
+        q0 = self.controller.target.copy()
+        yaw0 = float(q0[2])
         path = self.path_to(goal, reach)
         keep = path[1:-1][::WAYPOINT_STRIDE] + [path[-1]]
-        q0 = self.controller.target.copy()
-        yaw0 = q0[2]
-        dyaw = (goal[2] - yaw0 + math.pi) % (2 * math.pi) - math.pi
+        dyaw = _wrap(goal[2] - yaw0)
+        ways = [([(x, y, yaw0 + dyaw * min(1.0, 2.0 * k / len(keep))) for k, (x, y) in enumerate(keep, start=1)],
+                 path)]
+        if reach > self.radius + CLEARANCE:
+            grids = self._grids(reach)
+            pose_clear = None
+            if clear is not None:
+                def pose_clear(x: float, y: float, yaw: float) -> bool:
+                    q = tuck.copy()
+                    q[:3] = (x, y, yaw)
+                    return clear(q)
+            first = self._turn_spot(tuple(q0[:2]), yaw0, reach, grids, pose_clear)
+            last = self._turn_spot(tuple(goal[:2]), goal[2], reach, grids)
+            try:
+                ahead = self.path_to(goal if last is None else (*last[0], goal[2]), reach,
+                                     start=None if first is None else first[0])
+            except NavigationError:
+                ahead = []
+            if ahead and (clear is not None or path_length(ahead) > 2.0 * CARRY_TURN):
+                points = [ahead[0], *ahead[1:-1][::WAYPOINT_STRIDE], ahead[-1]]
+                ways.insert(0, (_carry_poses(points, yaw0, goal, first, last),
+                                [tuple(q0[:2]), *ahead, tuple(goal[:2])]))
+        if clear is not None and reach > self.radius + CLEARANCE:  # also: the heading kept, turned at the end
+            along = np.cumsum(np.hypot(*np.diff(np.asarray([tuple(q0[:2]), *keep]), axis=0).T))
+            ends = np.clip((along - along[-1] + CARRY_TURN) / CARRY_TURN, 0.0, 1.0)
+            ways.append(([(x, y, yaw0 + dyaw * float(f)) for (x, y), f in zip(keep, ends, strict=True)], path))
+        if clear is not None and len(ways) > 1:
+            ways.sort(key=lambda way: self._touches(q0, tuck, way[0], reach, clear))
+        poses, path = ways[0]
         waypoints = []
-        for k, (x, y) in enumerate(keep, start=1):
+        for pose in poses:
             q = tuck.copy()
-            q[:3] = (x, y, yaw0 + dyaw * min(1.0, 2.0 * k / len(keep)))  # turn during the first half
+            q[:3] = pose
             waypoints.append(q)
         if np.max(np.abs(self.controller.target[3:11] - tuck[3:11])) > 1e-3:  # tuck first, on the spot
             q = tuck.copy()
@@ -212,28 +315,93 @@ class Navigator:
         self.controller.settle(0.005, max_seconds=2.0)
         return path_length(path)
 
+    @staticmethod
+    def _touches(q0: np.ndarray, tuck: np.ndarray, poses: list[tuple[float, float, float]], reach: float,
+                 clear: Callable[[np.ndarray], bool]) -> int:
+        """How many configurations along base `poses` (x m, y m, yaw rad; from q0's, shape (13,)) with the arm at
+        `tuck`, every SWEEP_STEP m of the base or of a point `reach` m out as it turns, are not `clear`."""
+        touched, previous = 0, np.asarray(q0[:3], dtype=float)
+        for pose in poses:
+            pose = np.asarray(pose, dtype=float)
+            move = max(float(np.hypot(*(pose[:2] - previous[:2]))), abs(float(pose[2] - previous[2])) * reach)
+            for s in np.linspace(0.0, 1.0, max(1, int(np.ceil(move / SWEEP_STEP))) + 1)[1:]:
+                q = tuck.copy()
+                q[:3] = previous + s * (pose - previous)
+                touched += not clear(q)
+            previous = pose
+        return touched
+
+
+def _wrap(angle: float) -> float:
+    return (angle + math.pi) % (2 * math.pi) - math.pi
+
+
+def _carry_poses(points: list[tuple[float, float]], yaw0: float, goal: tuple[float, float, float],
+                 first: tuple | None, last: tuple | None) -> list[tuple[float, float, float]]:
+    """Base poses (x m, y m, yaw rad) along `points` (x, y in m) for a base at heading `yaw0` carrying an object
+    held out in front to `goal`: each facing the way ahead (the next point; the last one the way it came).
+    With a `first` turn spot (see `Navigator._turn_spot`), points[0] is that point straight behind the base: it
+    backs there, then turns on it where it turns touching nothing; else the heading is blended from `yaw0` over
+    the first CARRY_TURN m. With a `last` turn spot, points[-1] is that point straight behind the goal: the base
+    reaches the goal heading there (turning on it where that touches nothing, else over the last CARRY_TURN m
+    before it) and drives straight in; without one, the heading is blended into the goal's over the last
+    CARRY_TURN m. Each heading is within pi of the one before (the base turns the short way)."""
+    pts = [points[0]]
+    for p in points[1:]:  # points closer than HEADING_STEP to the one before give no heading (a grid cell beside)
+        if math.dist(p, pts[-1]) >= HEADING_STEP:
+            pts.append(p)
+    if math.dist(points[-1], pts[-1]) > 1e-6:
+        pts[-1 if len(pts) > 1 else len(pts):] = [points[-1]]
+    xy = np.asarray(pts, dtype=float)
+    steps = np.diff(xy, axis=0)
+    ahead = [math.atan2(d[1], d[0]) for d in steps] or [yaw0]
+    ahead.append(ahead[-1])
+    done = np.concatenate([[0.0], np.cumsum(np.hypot(steps[:, 0], steps[:, 1]))])
+    total = float(done[-1])
+    headings = []
+    for heading, along in zip(ahead, done, strict=True):
+        yaw = heading
+        if not (last and last[1]) and total - along < CARRY_TURN:
+            yaw = goal[2] + _wrap(heading - goal[2]) * (total - along) / CARRY_TURN
+        if not (first and first[1]) and along < CARRY_TURN:
+            yaw = yaw0 + _wrap(yaw - yaw0) * along / CARRY_TURN
+        headings.append(yaw)
+    poses = [(*pts[0], yaw0)] if first else []  # backed out (then turned on the spot where that is clear)
+    poses += [(*p, yaw) for p, yaw in zip(pts, headings, strict=True)][0 if first else 1:]
+    if last:
+        poses += [(*pts[-1], goal[2]), (goal[0], goal[1], goal[2])]
+    unwrapped, previous = [], yaw0
+    for x, y, yaw in poses:
+        previous = previous + _wrap(yaw - previous)
+        unwrapped.append((float(x), float(y), previous))
+    return unwrapped
+
 
 def base_candidates(grip_pos: np.ndarray, grip_rot: np.ndarray, previous_xy: np.ndarray | None,
                     reach_in: np.ndarray | None = None) -> list[tuple[float, float, float]]:
     """Base poses (x m, y m, yaw rad) behind a grip pose, facing it: nearest `previous_xy` first, or, without
-    one, straight behind the grasp first (BASE_TURNS, then BASE_DISTANCES order). "Behind" is against the grip
-    x's horizontal part, or against `reach_in` (a horizontal direction, shape (2,) or (3,)) where given."""
+    one, straight behind the grasp first (BASE_TURNS, then BASE_DISTANCES order); then, in the same order, those
+    FAR_DISTANCES away, for where no nearer one is free or reaches. "Behind" is against the grip x's horizontal
+    part, or against `reach_in` (a horizontal direction, shape (2,) or (3,)) where given."""
     approach = grip_rot[:2, 0] if reach_in is None else np.asarray(reach_in, dtype=float)[:2]
     norm = float(np.linalg.norm(approach))
     if norm > 0.3 or previous_xy is None:
         heading = math.atan2(approach[1], approach[0])
     else:
         heading = math.atan2(grip_pos[1] - previous_xy[1], grip_pos[0] - previous_xy[0])
-    poses = []
-    for turn in BASE_TURNS:
-        for distance in BASE_DISTANCES:
-            yaw = heading + float(turn)
-            xy = grip_pos[:2] - distance * np.array([math.cos(yaw), math.sin(yaw)])
-            poses.append((float(xy[0]), float(xy[1]), yaw))
-    if previous_xy is None:
-        return poses
-    return sorted(poses, key=lambda p: float(np.linalg.norm(np.array(p[:2]) - previous_xy)) + 0.2 * abs(
-        (p[2] - heading + math.pi) % (2 * math.pi) - math.pi))
+    ordered = []
+    for distances in (BASE_DISTANCES, FAR_DISTANCES):
+        poses = []
+        for turn in BASE_TURNS:
+            for distance in distances:
+                yaw = heading + float(turn)
+                xy = grip_pos[:2] - distance * np.array([math.cos(yaw), math.sin(yaw)])
+                poses.append((float(xy[0]), float(xy[1]), yaw))
+        if previous_xy is not None:
+            poses.sort(key=lambda p: float(np.linalg.norm(np.array(p[:2]) - previous_xy)) + 0.2 * abs(
+                (p[2] - heading + math.pi) % (2 * math.pi) - math.pi))
+        ordered += poses
+    return ordered
 
 
 def base_z(layout, node: str) -> float:

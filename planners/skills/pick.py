@@ -1,8 +1,9 @@
 """The `pick` skill of `planners.skills.Robot`: grasp an object and lift it, checked in physics.
 
 From above (top grasps, off-centre ones, out of a drawer past its front), or from a cabinet's shelf or under a
-low shelf from the front (shelf grasps, the object lifted, drawn out, then raised); a failed grasp is retried
-from the next candidate. Movement comes from `planners.motion.arm`.
+low shelf from the front (shelf grasps, the object lifted, drawn out, then raised; from a place with little
+free height but nothing over it, a sink's basin, from the front first, then from above); a failed grasp is
+retried from the next candidate. Movement comes from `planners.motion.arm`.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from planners.motion.arm import (
 )
 from planners.motion.control import FREE_MOTION
 from planners.motion.navigation import NavigationError
-from planners.skills.parts import behind_a_door, drawer_rim, shelves_inside
+from planners.skills.parts import behind_a_door, covered_places, drawer_rim, shelves_inside
 from planners.skills.result import SkillResult
 
 LIFT = 0.15  # m
@@ -43,7 +44,7 @@ HOLD_SECONDS = 0.5
 # a side grasp lifts the object SIDE_LIFT m off its shelf (see planners.motion.arm),
 SIDE_PULL = 0.35  # m: then draws it this far out of the furniture,
 SIDE_RAISE = 0.13  # m: then raises it this much more
-OPEN_ABOVE = 0.5  # m of free height above a place below which a grasp from above does not fit
+OPEN_ABOVE = 0.5  # m of free height above a place below which a grasp from above may not fit
 CLOSING_STEP = 0.005  # m per finger between the openings at which the fingers' way as they close is checked
 NEIGHBOUR_PUSH = 0.005  # m an open finger coming down onto a grasp may press into a neighbour (it slides it a
 # little aside; a side grasp of a glass grazed the wine glass beside it 3 mm, a roll's finger sank 12 mm into the
@@ -86,9 +87,15 @@ class Pick:
         position, quat = self.world.object_pose(name)
         furniture = self.navigator.furniture.get(node)
         inside = graph.relation_of(name) == RELATION_NAMES[INSIDE] and furniture is not None
-        if (inside and behind_a_door(furniture)) or self._under_a_shelf(node, position, cls.size[2]):
+        covered, low = self._standing_on(node, position, cls.size[2])
+        if (inside and behind_a_door(furniture)) or covered:
             return self._pick_from_shelf(name, node, cls, position, quat)  # from the front, the base placed per grasp
         failures: list[str] = []
+        if low:  # from the front first, then (where no front grasp moved it) from above
+            outcome = self._pick_from_shelf(name, node, cls, position, quat)
+            if outcome.success or disturbed(position, quat, *self.world.object_pose(name)):
+                return outcome
+            failures.append(outcome.reason.removeprefix(f"{name}: "))
         if into is not None and furniture is not None and shelves_inside(self.spots, self.navigator.furniture.get(
                 into), into, None):  # from the side nearest where the robot would stand
             try:
@@ -383,14 +390,19 @@ class Pick:
             self.controller.move_through([result.q])
         self.arm.retract()
 
-    def _under_a_shelf(self, node: str, position: np.ndarray, height: float) -> bool:
-        """Whether an object of `height` m at `position` stands on a fixed shelf of furniture `node` with another
-        shelf less than OPEN_ABOVE m above it (a bookshelf's lower levels): only a grasp from the front fits."""
+    def _standing_on(self, node: str, position: np.ndarray, height: float) -> tuple[bool, bool]:
+        """Of the fixed place of furniture `node` an object of `height` m at `position` stands on: (whether it lies
+        under another of its places, `covered_places`: a bookshelf's lower levels, where only a grasp from the front
+        fits; whether it has less than OPEN_ABOVE m of free height, though nothing of `node` is over it: a shower's
+        corner shelf, a sink's basin, where one from the front may fit better than one from above)."""
         furniture = self.spots.furniture.get(node)
         if furniture is None:
-            return False
+            return False, False
         bottom = position[2] - height / 2
-        below = [(place_world(self.world.layout, furniture, p)["z"], p) for _, p in
-                 [*self.spots.places_of(node, ON), *self.spots.places_of(node, INSIDE)] if p.part is None]
-        below = [(z, p) for z, p in below if z <= bottom + 0.02]
-        return bool(below) and max(below, key=lambda zp: zp[0])[1].clearance < OPEN_ABOVE
+        below = [(place_world(self.world.layout, furniture, p)["z"], relation, k, p) for relation in (ON, INSIDE)
+                 for k, p in self.spots.places_of(node, relation) if p.part is None]
+        below = [(z, relation, k, p) for z, relation, k, p in below if z <= bottom + 0.02]
+        if not below:
+            return False, False
+        _, relation, k, place = max(below, key=lambda b: b[0])
+        return k in covered_places(self.spots, node, relation), place.clearance < OPEN_ABOVE

@@ -21,7 +21,7 @@ from homer_sim.home.catalog import CATALOG
 from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
 from planners.grasps.geometry import matrix_to_quat, yaw_matrix
-from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, SIDE_LIFT, Arm
+from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, PITCHED_HAND, SIDE_LIFT, Arm
 from planners.motion.clearance import ARC_BASE_COST, Held
 from planners.motion.control import CARRY_MOTION
 from planners.motion.navigation import CLEARANCE, NavigationError, base_candidates
@@ -135,7 +135,7 @@ class Place:
         held_at = self.arm.held_offset(name)
         try:
             self.navigator.drive_to(self.navigator.stand_near(tuple(target[:2])), self.arm.carry(),
-                                    self.arm.held_reach(), **CARRY_MOTION)
+                                    self.arm.held_reach(), **CARRY_MOTION, clear=self.arm.carry_clear())
         except HomerError as error:
             return SkillResult(False, f"place: {error}")
         slip = float(np.linalg.norm(self.arm.held_offset(name) - held_at))
@@ -344,11 +344,12 @@ class Place:
 
     def _into_shelf(self, out: np.ndarray) -> np.ndarray:
         """The grip rotation (shape (3, 3)) that carries the held object into a shelf whose front faces `out`
-        (shape (2,)): the hand's now, turned about the vertical; a hand held level then points into the shelf,
-        one pointing down keeps its turn relative to the base, the base facing the shelf."""
+        (shape (2,)): the hand's now, turned about the vertical; a hand held level or pitched then points into the
+        shelf (a pitched hand leaning aside meets the shelf's side wall), one pointing down keeps its turn relative
+        to the base, the base facing the shelf."""
         now = self.world.data.site("robot/grip").xmat.reshape(3, 3)
-        level = np.linalg.norm(now[:2, 0]) > LEVEL_HAND
-        turn = math.atan2(-out[1], -out[0]) - (math.atan2(now[1, 0], now[0, 0]) if level else
+        pitched = np.linalg.norm(now[:2, 0]) > PITCHED_HAND
+        turn = math.atan2(-out[1], -out[0]) - (math.atan2(now[1, 0], now[0, 0]) if pitched else
                                                self.controller.target[2])
         return yaw_matrix(turn) @ now
 
@@ -397,7 +398,7 @@ class Place:
             if ease is None:
                 continue
             try:
-                self.navigator.drive_to(base, posture, reach, **CARRY_MOTION)
+                self.navigator.drive_to(base, posture, reach, **CARRY_MOTION, clear=self.arm.carry_clear())
             except NavigationError:
                 continue
             path = [start.q, *path]

@@ -82,14 +82,17 @@ class TripleResult:
     wall_s: float
 
 
-def occurrences(data: Path, households: list[str] | None = None) -> list[Occurrence]:
+def occurrences(data: Path, households: list[str] | None = None, objects: list[str] | None = None
+                ) -> list[Occurrence]:
     """The first occurrence of every (object, source, destination) move in the training days of the dataset
-    at `data`, in household, day and minute order."""
+    at `data` (only `households`' days and `objects`' moves, where given), in household, day and minute order."""
     dataset = Dataset(data)
     first: dict[tuple[str, str, str], Occurrence] = {}
     for household in households or list(dataset.meta.households):
         for day in dataset.days(household, "train"):
             for minute, obj, source, destination, _ in day.moves:
+                if objects and obj not in objects:
+                    continue
                 first.setdefault((obj, source, destination),
                                  Occurrence(obj, source, destination, household, day.index, float(minute)))
     return list(first.values())
@@ -336,15 +339,17 @@ def relocation_trial(bench: Bench, trial: tuple[Occurrence, str, int]) -> Triple
 
 
 def run_relocations(data: Path, quick: bool = False, seed: int = 0, progress: bool = True,
-                    households: list[str] | None = None, backend: Backend = IN_PROCESS) -> dict:
-    """Try every triple of the dataset at `data` (or the quick subset) on `backend` (this process, local
-    processes or Ray: on a cluster every node must see the dataset at `data`) and summarise as one JSON object.
+                    households: list[str] | None = None, backend: Backend = IN_PROCESS,
+                    objects: list[str] | None = None) -> dict:
+    """Try every triple of the dataset at `data` (or the quick subset; only `households`' days and `objects`'
+    moves, where given) on `backend` (this process, local processes or Ray: on a cluster every node must see the
+    dataset at `data`) and summarise as one JSON object.
     Each triple's random stream is seeded from (seed, triple), so a triple does not depend on which others run."""
     from tqdm import tqdm
 
     bench = Bench(data)
     classes = {o.name: o.cls for o in bench.world.layout.objects}
-    found = occurrences(data, households)
+    found = occurrences(data, households, objects)
     excluded = {o.triple: why for o in found if (why := exclusion_reason(o, classes[o.obj])) is not None}
     tried = [o for o in found if o.triple not in excluded]
     if quick:

@@ -43,6 +43,8 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
                        help="the relocation suite instead of picks (needs --data; --quick: a few triples)")
     suite.add_argument("--data", type=Path, help="dataset folder made by `homer generate` (with --relocations)")
     suite.add_argument("--households", nargs="+", metavar="NAME", help="only these households' days")
+    suite.add_argument("--objects", nargs="+", metavar="NAME",
+                       help="only these objects' moves (with --relocations)")
     suite.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
     suite.add_argument("--json", action="store_true", help="print one JSON object")
     suite.set_defaults(func=cmd_grasp_suite)
@@ -64,6 +66,6 @@ def _relocations(args: argparse.Namespace) -> int:
     if not (args.relocations and args.data):
         raise HomerError("--relocations and --data DIR go together (the relocation suite reads a dataset's days)")
     result = run_relocations(args.data, quick=args.quick, seed=args.seed, progress=not args.quiet,
-                             households=args.households, backend=backend_from_args(args))
+                             households=args.households, backend=backend_from_args(args), objects=args.objects)
     emit(result, args.json, [format_relocations(result)])
     return 0 if result["meets_targets"] else 1

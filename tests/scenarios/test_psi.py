@@ -210,3 +210,24 @@ def test_a_failure_in_the_object_itself_waits_until_it_is_moved_others_a_window(
     assert policy._excluded("bowl", 430, graph) is None  # a window later
     assert "until it has been moved" in policy._excluded("milk", 900, graph)
     assert policy._excluded("milk", 900, _graph(milk="table")) is None  # the person moved it
+
+
+def test_a_relocation_waiting_for_the_person_is_counted_when_it_can_no_longer_be_done() -> None:
+    """A relocation the person stood in the way of waits for the next snapshot (`Helper.waiting`); if the person
+    moves the object meanwhile, or the day ends first, it is recorded as not done, the person in the way its
+    cause, never dropped uncounted."""
+    from scenarios.assist import AssistLog, Helper
+    from scenarios.causes import cause_of
+    from scenarios.psi import Relocation
+
+    helper = Helper.__new__(Helper)  # the bookkeeping only: no world, no robot
+    helper.log, helper.recording = AssistLog(), None
+    helper.waiting = [Relocation("bowl", "cupboard", "table", 1, 0.9)]
+    assert helper.act([], _graph(bowl="sink"), MOVABLE, 400) == 400.0  # the person took the bowl meanwhile
+    assert [(o.relocation.obj, o.done) for o in helper.log.relocations] == [("bowl", False)]
+    assert helper.waiting == []
+    helper.waiting = [Relocation("milk", "fridge", "table", 1, 0.9)]
+    helper.end_day(1440)
+    outcomes = helper.log.relocations
+    assert [(o.relocation.obj, o.done) for o in outcomes] == [("bowl", False), ("milk", False)]
+    assert {cause_of(o.reason) for o in outcomes} == {"the person in the way"}

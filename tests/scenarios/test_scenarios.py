@@ -77,9 +77,6 @@ def test_the_robot_clears_up_after_breakfast(morning: tuple[MorningRun, Path]) -
     assert back >= set(ITEMS), f"the robot put back only {sorted(back)}: {run.result['relocations']}"
 
 
-@pytest.mark.xfail(strict=True, reason="regression of issue 19's placing work (first at 6293e7a, top spots "
-                   "lowered onto with a checked way down): on this morning the put-back into the cupboard and fridge "
-                   "finds no free base pose and the cereal falls out of the hand; the full breakfast sets and clears")
 def test_on_a_skipped_breakfast_the_robot_puts_its_help_back(morning: tuple[MorningRun, Path]) -> None:
     """The same morning without breakfast (on the dataset and predictor `morning` cached): what the robot set out
     goes back once breakfast time has passed (checked at 07:30, after the 07:20 tick)."""

@@ -10,7 +10,7 @@ from homer_sim.errors import HomerError
 from homer_sim.graph import INSIDE, ON
 from homer_sim.home.apartment import default_layout
 from homer_sim.person.activities import load_library, script_files
-from homer_sim.person.aliases import ALIASES, SCENERY, Resolver, default_resolver
+from homer_sim.person.aliases import ALIASES, INSTANCES, SCENERY, Resolver, default_resolver
 from homer_sim.person.scripts import TIME_VERBS, WORLD_VERBS, ScriptError, parse_script, symbolic_run
 
 HOMER_SCRIPTS = Path(__file__).resolve().parents[3] / "shared" / "homer_reference" / "sourcedScriptsByActivity"
@@ -136,8 +136,26 @@ def test_resolver_maps_exact_alias_and_scenery_names() -> None:
 def test_alias_targets_are_nodes_and_entries_without_target_are_left_out() -> None:
     nodes = set(default_resolver().nodes)
     assert set(ALIASES.values()) <= nodes and set(SCENERY.values()) <= nodes
+    assert set(INSTANCES.values()) - {None} <= nodes
     assert not (set(ALIASES) | set(SCENERY)) & nodes
     assert "sink" not in Resolver(["bowl"]) and "bowl" in Resolver(["bowl"])
+
+
+def test_instances_pick_the_piece_the_id_names_and_an_instance_without_counterpart_stays_unknown() -> None:
+    resolver = default_resolver()
+    assert resolver("kitchen_counter", 119) == "kitchen_counter_right"
+    assert resolver("Kitchen_Counter", 123) == resolver("kitchen_counter") == "kitchen_counter_left"
+    assert resolver("faucet", 20) == "sink_bathroom" and resolver("faucet") == "sink_dining_room"
+    assert resolver("table", 1) == "table_dining_room"  # an id the table lacks: by the name
+    assert resolver("water_glass") == "drinking_glass" and resolver.knows("chair")
+    assert not resolver.knows("chair", 194)
+    with pytest.raises(KeyError, match="instance 194 of the HOMER\\+ apartment has no counterpart"):
+        resolver("chair", 194)
+    script = parse_script("## 1-2\n[Walk] <kitchen_counter> (119)\n[Sit] <sofa> (198)\n[Sit] <sofa>\n", "test.txt",
+                          "reading", "0", resolver)
+    assert [a.args for a in script.actions] == [("kitchen_counter_right",), ("sofa_bedroom",), ("sofa_home_office",)]
+    with pytest.raises(ScriptError, match="test.txt:2: unknown name 'chair'"):
+        parse_script("## 1-2\n[Sit] <chair> (194)\n", "test.txt", "reading", "0", resolver)
 
 
 homer = pytest.mark.skipif(not HOMER_SCRIPTS.is_dir(), reason="the HOMER reference scripts are not here")
