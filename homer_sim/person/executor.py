@@ -1,8 +1,8 @@
 """The executor: a person lives a sampled schedule in physics, and the scene graph is read every 10 minutes.
 
 Actions act on the world through the avatar: walking is kinematic along grid paths, grasps weld an object to
-a hand at its current relative pose and lift it with physics, placements release it at a sampled free spot
-where it settles, doors and drawers are driven by force at their joints. The executor finds objects where
+a hand at its current relative pose and lift it with physics, placements lower it onto a sampled free spot
+and let go, doors and drawers are driven by force at their joints. The executor finds objects where
 the observed scene graph says they are and opens a container only when it is closed and in the way.
 """
 
