@@ -6,7 +6,7 @@ value. Observing a graph from physics lives in `homer_sim.observe`.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Container, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -77,6 +77,13 @@ class SceneGraph:
         for child, p in enumerate(self.parent):
             if p >= 0:
                 yield self.nodes[child], self.nodes[p], RELATION_NAMES[int(self.relation[child])]
+
+    def anchor_of(self, name: str, movable: Container[str]) -> str:
+        """The first node at or above `name` that is not in `movable` (the furniture, appliance or room an object
+        is reached at, through whatever objects it lies on)."""
+        while name in movable and self.parent_of(name):
+            name = self.parent_of(name)
+        return name
 
     def room_of(self, name: str) -> str:
         """The root above `name` (its room, or `outside`)."""

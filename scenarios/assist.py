@@ -200,10 +200,7 @@ class Helper:
                 picked[step.obj] = SkillResult(False, reason)
                 self._finish(by_obj[step.obj], minute, False, reason)
                 return None
-            graph = self.robot.observer.update()
-            node = graph.parent_of(step.obj)
-            while node in self.world.object_names:  # on what lies on the top
-                node = graph.parent_of(node)
+            node = self.robot.observer.update().anchor_of(step.obj, self.world.object_names)  # what it lies on
             return self.robot.pick(step.obj, node, into=by_obj[step.obj].destination)
         if step.action == "pick":
             blocked = [c for c in (step.node, by_obj[step.obj].destination) if c in failed_containers]

@@ -171,11 +171,9 @@ def predicted_relocations(graph: SceneGraph, movable: np.ndarray, rollout: Rollo
 
 
 def anchor_of(graph: SceneGraph, movable: np.ndarray, node: str) -> str:
-    """The first non-movable node at or above `node` (the furniture, appliance or room it is reached at)."""
-    i = graph.index(node)
-    while movable[i] and graph.parent[i] >= 0:
-        i = int(graph.parent[i])
-    return graph.nodes[i]
+    """The first non-movable node at or above `node` (the furniture, appliance or room it is reached at);
+    movable: Shape (N,) bool over the graph's nodes."""
+    return graph.anchor_of(node, {graph.nodes[i] for i in np.flatnonzero(movable)})
 
 
 def plan_relocations(graph: SceneGraph, movable: np.ndarray, relocations: Sequence[Relocation],

@@ -213,14 +213,6 @@ def _stop_after(index: int, last: int) -> None:
         raise _Stop
 
 
-def _anchor(graph, world, node: str) -> str:
-    """The first node at or above `node` that is not a movable object (where the robot stands to reach it)."""
-    movable = set(world.object_names)
-    while node in movable and graph.parent_of(node):
-        node = graph.parent_of(node)
-    return node
-
-
 def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, destination: str) -> str | None:
     """Open what closes over `source` and `destination`, pick `obj`, place it, close what was opened; None when
     every skill succeeded, else the first failure's reason prefixed with its skill. Where both close (two pieces
@@ -230,7 +222,7 @@ def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, des
     from planners.skills.parts import parts_to_open
 
     graph = robot.observer.update()
-    anchor = _anchor(graph, robot.world, source)
+    anchor = graph.anchor_of(source, robot.world.object_names)
     at = anchor if anchor in robot.navigator.furniture else None
     first = parts_to_open(robot.world, graph, containers.get(anchor, []), obj)
     second = [p for p in containers.get(destination, []) if p not in first]
@@ -247,7 +239,7 @@ def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, des
         failure = failure or _close(robot, first) or _open(robot, second)
         if failure is not None:
             return failure
-        result = robot.pick(obj, _anchor(robot.observer.update(), robot.world, obj), into=destination)
+        result = robot.pick(obj, robot.observer.update().anchor_of(obj, robot.world.object_names), into=destination)
         if not result.success:
             return f"pick: {result.reason}"
     result = robot.place(destination)
