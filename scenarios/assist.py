@@ -100,13 +100,13 @@ class Helper:
         their source and not asked for again), then park; returns the routine minute the robot is done (`minute`
         when there is nothing to do). A waiting relocation whose object the person moved meanwhile is not done.
         """
-        asked = {r.obj for r in relocations}
-        for r in self.waiting:
-            if r.obj not in asked and graph.parent_of(r.obj) != r.source:
+        asked, still = {r.obj for r in relocations}, []
+        for r in (r for r in self.waiting if r.obj not in asked):
+            if graph.parent_of(r.obj) == r.source:
+                still.append(r)
+            else:
                 self.refuse(r, minute, f"{IN_THE_WAY} (the person) until {r.obj} was moved")
-        relocations = [*(r for r in self.waiting if r.obj not in asked and graph.parent_of(r.obj) == r.source),
-                       *relocations]
-        self.waiting = []
+        relocations, self.waiting = [*still, *relocations], []
         if not relocations:
             return float(minute)
         steps = self._needed(plan_steps(graph, movable, relocations, self.containers, self.open_containers()),

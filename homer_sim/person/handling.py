@@ -284,13 +284,13 @@ class Handling:
     def release(self, name: str, spot: Spot) -> None:
         """Put a held object (and its riders) down at `spot`: the hand, turning it to the spot's yaw, brings it
         LOWER_M above the spot, lowers it with physics until it touches what it is put on (or reaches the spot),
-        lets go, and the object settles."""
+        lets go, and the object settles. One in no hand (carried otherwise) is set onto the spot and settles."""
         hand = self.avatar.hand_of(name)
         riders = self.avatar.riders.pop(name, [])
         pos, quat = self.world.object_pose(name)
         rel = {r: relative_pose(pos, quat, *self.world.object_pose(r)) for r in riders}
         target_quat = np.array(yaw_quat(spot.yaw))
-        above = np.array(spot.pos) + np.array([0.0, 0.0, LOWER_M])
+        above = np.array(spot.pos) + np.array([0.0, 0.0, LOWER_M if hand is not None else 0.0])
         for item in [name, *riders]:
             self.avatar.unweld(item)
         self.world.set_object_pose(name, above, target_quat, forward=False)

@@ -398,8 +398,8 @@ def base_candidates(grip_pos: np.ndarray, grip_rot: np.ndarray, previous_xy: np.
                 xy = grip_pos[:2] - distance * np.array([math.cos(yaw), math.sin(yaw)])
                 poses.append((float(xy[0]), float(xy[1]), yaw))
         if previous_xy is not None:
-            poses.sort(key=lambda p: float(np.linalg.norm(np.array(p[:2]) - previous_xy)) + 0.2 * abs(
-                (p[2] - heading + math.pi) % (2 * math.pi) - math.pi))
+            poses.sort(key=lambda p: float(np.linalg.norm(np.array(p[:2]) - previous_xy))
+                       + 0.2 * abs(_wrap(p[2] - heading)))
         ordered += poses
     return ordered
 
