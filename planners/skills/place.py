@@ -20,7 +20,7 @@ from homer_sim.graph import INSIDE, RELATION_NAMES
 from homer_sim.home.catalog import CATALOG
 from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
-from planners.grasps.geometry import matrix_to_quat, yaw_matrix
+from planners.grasps.geometry import axis_rotation, matrix_to_quat, yaw_matrix
 from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, PITCHED_HAND, SIDE_LIFT, Arm
 from planners.motion.clearance import ARC_BASE_COST, Held
 from planners.motion.control import CARRY_MOTION
@@ -30,7 +30,9 @@ from planners.skills.result import SkillResult
 
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 NO_UP_FAMILIES = ("cloth", "sphere")  # shapes that lie as well one way as another: put down, none falls over
-CARRY_SLIP = 0.03  # m the held object may shift in the hand while carried before a place gives up
+CARRY_SLIP = 0.03  # m the held object may shift in the hand on the way into a shelf before it no longer goes in
+# as planned; one that moved more while carried, the fingers met, fell out
+UPRIGHT_TURN = math.radians(3.0)  # rad a held object hangs tilted at least before a lowering turns it upright
 TOP_SPOTS = 4  # free spots on an open top tried for a place (the first one no way down is blocked to),
 TOP_SPOT_GAP = 0.08  # m apart at least,
 SPOT_DRAWS = 40  # from this many free spots of each place drawn in turn
@@ -109,11 +111,10 @@ class Place:
         return self._down_at(name, room, room, np.array(spot.pos))
 
     def _place_on_object(self, name: str, node: str) -> SkillResult:
-        """Put the held `name` on (into, for a bin) object `node`, which supports others: centred over it, at
-        the height it lands on what is there (its top, its floor or the pile in it)."""
+        """Put the held `name` on (into, for a bin) object `node`: centred over it, at the height it lands on what
+        is there (its top, its floor or the pile in it). An object the catalogue does not count as a support (a cd
+        player, a loaf) is tried too: whether the put-down object stays on it is for physics to say."""
         cls = CATALOG[self.world.layout.objects[self.world.object_index(node)].cls]
-        if not cls.supports:
-            return SkillResult(False, f"place: {node} is an object nothing rests on")
         position = self.world.object_pose(node)[0]
         size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
         try:
@@ -138,41 +139,46 @@ class Place:
                                     self.arm.held_reach(), **CARRY_MOTION, clear=self.arm.carry_clear())
         except HomerError as error:
             return SkillResult(False, f"place: {error}")
-        slip = float(np.linalg.norm(self.arm.held_offset(name) - held_at))
-        if slip > CARRY_SLIP:
-            return self._slipped(name, slip)
-        return self._lower_onto(name, node, target, short=False)
+        return self._fell_out(name, held_at) or self._lower_onto(name, node, target, short=False)
 
     def _carry_to(self, name: str, node: str, target: np.ndarray) -> tuple[SkillResult | None, bool]:
         """Carry `name` to a base pose in front of furniture `node` facing `target` (m, the spot it goes to; see
-        `Arm.go_to`): (a failure if it could not, or slipped more than CARRY_SLIP in the hand on the way or fell
-        out; whether the robot stopped short with the object low)."""
+        `Arm.go_to`): (a failure if it could not or the object fell out of the hand on the way; whether the robot
+        stopped short with the object low)."""
         held_at = self.arm.held_offset(name)  # where the object hangs in the hand (grip frame)
         size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
         try:
             short = self.arm.go_to(node, target[:2], surface_z=target[2] - size[2] / 2)
         except NavigationError as error:
             return SkillResult(False, f"place: {error}"), False
-        slip = float(np.linalg.norm(self.arm.held_offset(name) - held_at))
-        return (self._slipped(name, slip) if slip > CARRY_SLIP else None), short
+        return self._fell_out(name, held_at), short
 
-    def _slipped(self, name: str, slip: float) -> SkillResult:
-        """The failure of a carry in which `name` moved `slip` m (more than CARRY_SLIP) in the hand: it fell out,
-        or, still in the hand, slipped (the caller decides where it goes down)."""
-        if self.arm.hand_empty():
+    def _fell_out(self, name: str, held_at: np.ndarray) -> SkillResult | None:
+        """The failure of a carry after which `name`, before it at `held_at` in the grip frame (m, shape (3,)),
+        moved more than CARRY_SLIP in the hand and the fingers met (it fell out; fingers closed on a thin cloth
+        meet too), else None: an object that slipped in the fingers but is still held is put down as it hangs now
+        (the lowering reads where it hangs; a basket held by its rim or a bag slid 4-13 cm in the hand and the
+        place gave up with them still held)."""
+        if np.linalg.norm(self.arm.held_offset(name) - held_at) > CARRY_SLIP and self.arm.hand_empty():
             self.arm.held = None
             return SkillResult(False, f"place: {name} fell out of the hand while carried")
-        return SkillResult(False, f"place: {name} slipped {slip * 100:.1f} cm in the hand while carried")
+        return None
 
     def _lower_onto(self, name: str, node: str, target: np.ndarray, short: bool) -> SkillResult:
         """Lower the held `name` onto `target` (m) on furniture `node` from APPROACH m above, as it hangs in the
-        hand, let go and retreat. Stopped `short` with the object low: first lift it over the surface, then drive
-        in close (the object passes over the edge) and move it across to above the spot in a straight line."""
+        hand (turned to stand it up, see `_lowering_rotations`), let go and retreat. Stopped `short` with the object
+        low: first lift it over the surface, then drive in close (the object passes over the edge) and move it
+        across to above the spot in a straight line."""
         grip = self.world.data.site("robot/grip")
-        offset = grip.xpos - self.world.object_pose(name)[0]  # keep the object where it hangs now
-        quat = self.arm.grip_quat()
-        release = target + offset + np.array([0.0, 0.0, 0.01])
-        above = release + np.array([0.0, 0.0, APPROACH])
+        now = grip.xmat.reshape(3, 3)
+        offset = grip.xpos - self.world.object_pose(name)[0]  # where the object hangs from the hand now
+        for rotation in self._lowering_rotations(name):  # the first the arm reaches above the spot at
+            turned = rotation @ now.T @ offset  # the hand turned about the object
+            quat = matrix_to_quat(rotation)
+            release = target + turned + np.array([0.0, 0.0, 0.01])
+            above = release + np.array([0.0, 0.0, APPROACH])
+            if self.arm.solve(above, quat).converged:
+                break
         if short and self.arm.grip_line(np.array([*grip.xpos[:2], max(grip.xpos[2], release[2] + PASS_OVER)]), quat):
             try:
                 self.navigator.drive_to(self.navigator.stand_pose(node, tuple(target[:2])),
@@ -210,38 +216,54 @@ class Place:
     def _lower_checked(self, name: str, node: str, target: np.ndarray) -> SkillResult | None:
         """Lower the held `name` onto `target` (m, a spot on furniture `node`) from where the robot stands, the
         base kept there, along a way (eased to APPROACH m above the spot, then straight down, the object as it
-        hangs in the hand) that keeps the arm and the object clear of the apartment; let go and retreat. None
-        (nothing moved) where no such way is found."""
+        hangs in the hand, stood up where it tilted: `_lowering_rotations`) that keeps the arm and the object clear
+        of the apartment; let go and retreat. None (nothing moved) where no such way is found."""
         held = self.arm.held_object(name)
-        rotation = self.world.data.site("robot/grip").xmat.reshape(3, 3).copy()
-        quat = matrix_to_quat(rotation)
-        release = target + np.array([0.0, 0.0, 0.01]) - rotation @ held.position
-        above = release + np.array([0.0, 0.0, APPROACH])
-        start = self.ik.solve(self.controller.target, above, quat, base_cost=ARC_BASE_COST)
-        if not start.converged or not self.clearance.clear(start.q, held=held):
-            return None
-        path = self.arm.checked_line(start.q, [above, release], quat, held)
-        ease = None if path is None else self._ease_path(self.controller.target, start.q, held)
-        if ease is None:
-            return None
-        self._ease_to(ease, start.q)
-        self.controller.move_through(path)
-        self.controller.settle(0.003)
-        return self._release_on(name, node, target, release, quat)
+        for rotation in self._lowering_rotations(name):
+            quat = matrix_to_quat(rotation)
+            release = target + np.array([0.0, 0.0, 0.01]) - rotation @ held.position
+            above = release + np.array([0.0, 0.0, APPROACH])
+            start = self.ik.solve(self.controller.target, above, quat, base_cost=ARC_BASE_COST)
+            if not start.converged or not self.clearance.clear(start.q, held=held):
+                continue
+            path = self.arm.checked_line(start.q, [above, release], quat, held)
+            ease = None if path is None else self._ease_path(self.controller.target, start.q, held)
+            if ease is None:
+                continue
+            self._ease_to(ease, start.q)
+            self.controller.move_through(path)
+            self.controller.settle(0.003)
+            return self._release_on(name, node, target, release, quat)
+        return None
+
+    def _lowering_rotations(self, name: str) -> list[np.ndarray]:
+        """The grip rotations (each shape (3, 3)) to lower the held `name` at, in the order tried: where it hangs
+        tilted more than UPRIGHT_TURN in the hand and has an up (not NO_UP_FAMILIES), first the hand turned about
+        the horizontal so that the object stands upright (a wine glass and a loaf that turned in the fingers were
+        set down tilted and fell over); then the hand as it is."""
+        now = self.world.data.site("robot/grip").xmat.reshape(3, 3).copy()
+        index = self.world.object_index(name)
+        up = self.world.data.xmat[self.world.object_body_ids[index]].reshape(3, 3)[:, 2]
+        angle = math.acos(min(max(float(up[2]), -1.0), 1.0))
+        axis = np.cross(up, [0.0, 0.0, 1.0])
+        if CATALOG[self.world.layout.objects[index].cls].family in NO_UP_FAMILIES or angle < UPRIGHT_TURN:
+            return [now]
+        return [axis_rotation(axis / np.linalg.norm(axis), angle) @ now, now]
 
     def _reachable(self, name: str, node: str, target: np.ndarray) -> bool:
-        """Whether the hand, holding `name` as it does now, reaches over `target` (m, a spot on furniture `node`) from
-        the base pose in front of `node` facing it, the base kept there (the IK pushes the base into the furniture
-        to reach a spot far back, and the furniture stops it)."""
-        grip = self.world.data.site("robot/grip")
-        above = target + grip.xpos - self.world.object_pose(name)[0] + np.array([0.0, 0.0, 0.01 + APPROACH])
+        """Whether the hand, holding `name` as it does now (turned as `_lowering_rotations` first turns it), reaches
+        over `target` (m, a spot on furniture `node`) from the base pose in front of `node` facing it, the base kept
+        there (the IK pushes the base into the furniture to reach a spot far back, and the furniture stops it)."""
+        held = self.arm.held_object(name)
+        rotation = self._lowering_rotations(name)[0]
+        above = target + np.array([0.0, 0.0, 0.01 + APPROACH]) - rotation @ held.position
         try:
             base = self.navigator.stand_pose(node, tuple(target[:2]))
         except NavigationError:
             return False
         q = self.controller.target.copy()
         q[:3] = base
-        return self.ik.solve(q, above, self.arm.grip_quat(), base_cost=ARC_BASE_COST).converged
+        return self.ik.solve(q, above, matrix_to_quat(rotation), base_cost=ARC_BASE_COST).converged
 
     def _held_opening(self) -> float:
         """The fingers' opening now (m per finger): round the held object, whose width a release must open past
