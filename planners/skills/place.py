@@ -25,6 +25,7 @@ from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, PITCHED_HAND, 
 from planners.motion.clearance import ARC_BASE_COST, Held
 from planners.motion.control import CARRY_MOTION
 from planners.motion.navigation import CLEARANCE, NavigationError, base_candidates
+from planners.robot import PREFIX
 from planners.skills.parts import covered_places, shelves_inside
 from planners.skills.result import SkillResult
 
@@ -37,6 +38,7 @@ TOP_SPOTS = 4  # free spots on an open top tried for a place (the first one no w
 TOP_SPOT_GAP = 0.08  # m apart at least,
 SPOT_DRAWS = 40  # from this many free spots of each place drawn in turn
 STOPPED_ABOVE = 0.02  # m above its spot a lowered object may stop before it counts as stopped on something
+DROP_HEIGHT = 0.05  # m above its spot a lowered object touching nothing but the robot is let fall at most
 SHELF_SPOTS = 6  # free spots tried for a place inside, nearest the front first, then half as many on each other
 # shelf (rack),
 SHELF_SPOT_GAP = 0.05  # m apart at least
@@ -201,17 +203,31 @@ class Place:
                     ) -> SkillResult:
         """With the held `name` lowered for `target` (m, its spot on `node`; the grip site at `release`, m, at
         `quat`): let go and retreat, unless its lowest point stopped more than STOPPED_ABOVE m above where its bottom
-        goes (it came down on something): then back up APPROACH m, still holding it."""
+        goes (it came down on something): then back up APPROACH m, still holding it. Where it stopped at most
+        DROP_HEIGHT m above touching nothing but the robot (the arm reaches no lower: a vacuum cleaner held by its
+        handle 2.6-4 cm above the floor), it is let go there."""
         index = self.world.object_index(name)
         size = np.asarray(CATALOG[self.world.layout.objects[index].cls].size)
         tilt = np.abs(self.world.data.xmat[self.world.object_body_ids[index]].reshape(3, 3)[2])
         low = float(self.world.object_pose(name)[0][2] - tilt @ size / 2)  # its lowest point (it may hang tilted)
         stopped = low - float(target[2] - size[2] / 2) - 0.01
-        if stopped > STOPPED_ABOVE:
+        if stopped > STOPPED_ABOVE and (stopped > DROP_HEIGHT or self._touches_apartment(name)):
             self.arm.grip_line(release + np.array([0.0, 0.0, APPROACH]), quat)
             return SkillResult(False, f"place: {name} stopped {stopped * 100:.1f} cm above its spot on {node}")
         opening = max(TOP_RELEASE_OPENING, self._held_opening() + RELEASE_OPENING)
         return self._let_go(name, node, opening, self._retreat(release, quat))
+
+    def _touches_apartment(self, name: str) -> bool:
+        """Whether object `name` touches anything but the robot now."""
+        model, data = self.world.model, self.world.data
+        body = self.world.object_body_ids[self.world.object_index(name)]
+        for contact in data.contact[:data.ncon]:
+            bodies = (int(model.geom_bodyid[contact.geom1]), int(model.geom_bodyid[contact.geom2]))
+            if body in bodies:
+                other = bodies[1] if bodies[0] == body else bodies[0]
+                if not model.body(other).name.startswith(PREFIX):
+                    return True
+        return False
 
     def _lower_checked(self, name: str, node: str, target: np.ndarray) -> SkillResult | None:
         """Lower the held `name` onto `target` (m, a spot on furniture `node`) from where the robot stands, the
