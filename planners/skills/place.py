@@ -25,7 +25,6 @@ from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, PITCHED_HAND, 
 from planners.motion.clearance import ARC_BASE_COST, Held
 from planners.motion.control import CARRY_MOTION
 from planners.motion.navigation import CLEARANCE, NavigationError, base_candidates
-from planners.robot import PREFIX
 from planners.skills.parts import covered_places, shelves_inside
 from planners.skills.result import SkillResult
 
@@ -219,15 +218,11 @@ class Place:
 
     def _touches_apartment(self, name: str) -> bool:
         """Whether object `name` touches anything but the robot now."""
-        model, data = self.world.model, self.world.data
+        model, data, robot = self.world.model, self.world.data, self.clearance.robot
         body = self.world.object_body_ids[self.world.object_index(name)]
-        for contact in data.contact[:data.ncon]:
-            bodies = (int(model.geom_bodyid[contact.geom1]), int(model.geom_bodyid[contact.geom2]))
-            if body in bodies:
-                other = bodies[1] if bodies[0] == body else bodies[0]
-                if not model.body(other).name.startswith(PREFIX):
-                    return True
-        return False
+        g1, g2 = data.contact.geom1[:data.ncon], data.contact.geom2[:data.ncon]
+        mine1, mine2 = model.geom_bodyid[g1] == body, model.geom_bodyid[g2] == body
+        return bool(np.any((mine1 & ~robot[g2]) | (mine2 & ~robot[g1])))
 
     def _lower_checked(self, name: str, node: str, target: np.ndarray) -> SkillResult | None:
         """Lower the held `name` onto `target` (m, a spot on furniture `node`) from where the robot stands, the
