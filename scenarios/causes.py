@@ -11,7 +11,7 @@ CAUSE_PATTERNS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("not graspable", ("not graspable",)),
     ("container did not open", ("did not open",)),
     ("fell out of the hand", ("fell out of the hand",)),
-    ("slipped in the hand", ("in the hand while carried", "in the hand on the way")),
+    ("slipped in the hand", ("in the hand on the way",)),
     ("fell over on the destination", ("fell over on",)),
     ("ended elsewhere", (" ended ",)),
     ("no free spot at the destination", ("no free spot",)),
