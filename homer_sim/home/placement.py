@@ -42,9 +42,12 @@ def yaw_quat(yaw: float) -> tuple[float, float, float, float]:
     return (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
 
 
-def _obstacles_on(layout: Layout, f: Furniture) -> list[tuple[float, float, float, float]]:
-    """Place-frame (x0, y0, x1, y1) rectangles of furniture standing on `f`."""
+def _obstacles_on(layout: Layout, f: Furniture, place: Place) -> list[tuple[float, float, float, float]]:
+    """Place-frame (x0, y0, x1, y1) rectangles of furniture standing on `f`, if `place` is its top (shelves and
+    the inside of a cabinet under an appliance standing on it are free)."""
     rects = []
+    if place.center[2] < f.size[2] - 1e-6:
+        return rects
     for other in layout.furniture:
         if other.on == f.name:
             x0, y0, x1, y1 = footprint(other)
@@ -151,7 +154,7 @@ def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
             continue
         f = furniture[decl.parent]
         for k, place in _candidate_places(f, decl):
-            spots = taken.setdefault((f.name, k), list(_obstacles_on(layout, f)))
+            spots = taken.setdefault((f.name, k), list(_obstacles_on(layout, f, place)))
             long = lengthwise(f, place, cls)
             # in a cabinet the first declared (the everyday things) stand front and centre, where a hand reaches
             # past the open door and the side walls
