@@ -125,7 +125,7 @@ _ROWS: tuple[tuple, ...] = (
     ("knifeblock", "box", (0.12, 0.10, 0.22), 1.2, _WOOD, "prop"),
     ("trashcan", "bin", (0.28, 0.28, 0.30), 1.2, _STEEL, "prop", True),
     ("cup", "cup", (0.08, 0.08, 0.095), 0.22, _CERAMIC),
-    ("fryingpan", "pot", (0.34, 0.26, 0.06), 1.0, _DARK),
+    ("fryingpan", "pot", (0.28, 0.20, 0.05), 0.8, _DARK),
     ("coffee_filter", "box", (0.13, 0.07, 0.08), 0.1, _PAPER),
     ("ground_coffee", "box", (0.09, 0.06, 0.16), 0.25, _BROWN),
     ("dry_pasta", "box", (0.18, 0.06, 0.22), 0.5, _YELLOW),
@@ -153,7 +153,7 @@ _ROWS: tuple[tuple, ...] = (
     ("razor", "utensil", (0.15, 0.04, 0.02), 0.04, _BLUE),
     ("laundry_detergent", "box", (0.25, 0.15, 0.28), 3.0, _BLUE),
     ("shaving_cream", "cylinder", (0.055, 0.055, 0.17), 0.3, _WHITE),
-    ("toothbrush_holder", "box", (0.22, 0.09, 0.03), 0.25, _WHITE, "object", True),
+    ("toothbrush_holder", "box", (0.22, 0.10, 0.03), 0.25, _WHITE, "object", True),
     # bedroom
     ("clothes_jacket", "cloth", (0.40, 0.30, 0.08), 1.0, _DARK),
     ("clothes_pants", "cloth", (0.35, 0.28, 0.05), 0.5, _BLUE),
