@@ -78,7 +78,6 @@ FURNITURE = (
     # Bedroom.
     _f("bed", "bed", "block", "bedroom", (8.95, 6.2), "W", (1.6, 2.0, 0.55), access="all",
        rgba=(0.85, 0.85, 0.95, 1.0)),
-    _f("chair_bedroom", "chair", "chair", "bedroom", (6.8, 4.85), "N", (0.5, 0.5, 0.9), seat_place=True),
     _f("table_bedroom", "table", "table", "bedroom", (9.7, 7.45), "W", (0.5, 0.5, 0.6)),
     _f("dresser", "dresser", "drawers", "bedroom", (5.8, 7.7), "S", (1.2, 0.5, 0.9), drawers=3),
     _f("bookshelf_bedroom", "bookshelf", "shelf", "bedroom", (7.2, 7.775), "S", (0.8, 0.35, 1.2),

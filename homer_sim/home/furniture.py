@@ -118,8 +118,7 @@ def block(f: Furniture) -> FurnitureGeometry:
 
 
 def seat(f: Furniture) -> FurnitureGeometry:
-    """A sofa or chair: a seat block with a backrest (and arms for a sofa); a sofa's seat holds objects, a chair's
-    only with seat_place (where people put things on it)."""
+    """A sofa or chair: a seat block with a backrest (and arms for a sofa)."""
     w, d, h = f.size
     seat_h, back = f.params.get("seat_height", 0.45), 0.18
     arm = 0.15 if f.kind == "sofa" else 0.0
@@ -134,7 +133,7 @@ def seat(f: Furniture) -> FurnitureGeometry:
             _box("arm_r", (-d / 2 + back, w / 2 - arm, seat_h), (d / 2, w / 2, seat_h + 0.2), rgba),
         ]
     places = ()
-    if f.kind == "sofa" or f.params.get("seat_place"):
+    if f.kind == "sofa":
         depth = d - back
         places = (Place(ON, (back / 2, 0.0, seat_h), (depth / 2 - 0.04, w / 2 - arm - 0.04), 0.5),)
     return FurnitureGeometry(tuple(boxes), places=places)
