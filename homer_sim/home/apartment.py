@@ -91,6 +91,8 @@ FURNITURE = (
        rgba=WHITE),
     _f("bathroom_cabinet", "bathroom_cabinet", "cabinet", "bathroom", (3.25, 6.8), "W", (0.8, 0.4, 1.2),
        shelves=(0.45, 0.85), rgba=WHITE),
+    _f("bathroom_shelf", "bathroom_shelf", "shelf", "bathroom", (1.5, 4.725), "N", (0.8, 0.35, 1.0),
+       shelves=(0.45,), rgba=WHITE),
     _f("washing_machine", "washing_machine", "cabinet", "bathroom", (3.15, 5.5), "W", (0.6, 0.6, 0.85),
        "appliance", top_place=True, rgba=WHITE, plinth=0.15),
 )
@@ -140,16 +142,20 @@ OBJECTS = (
     *_objects("bathroom_cabinet", INSIDE, "perfume hairdryer toilet_paper", level=0),
     *_objects("shower", INSIDE, "shampoo conditioner", level=1),
     *_objects("washing_machine", ON, "laundry_detergent", level=1),
-    # The HOMER+ apartment's objects, where its households start them; declared last so that the objects
-    # above keep their start poses.
-    *_objects("cupboard", INSIDE, "dry_pasta food_oatmeal ground_coffee", level=0),
-    *_objects("cupboard", INSIDE, "fryingpan"),
-    *_objects("cupboard", INSIDE, "cup coffee_filter food_peanut_butter juice", level=2),
-    *_objects("fridge", INSIDE, "food_chicken", level=1),
+    # The HOMER+ apartment's objects, where its households start them unless that is too full for the robot to
+    # reach in (their cupboard holds also the cup, the oats, the coffee and its filters, the peanut butter, the
+    # juice and the frying pan, their kitchen cabinet the washcloth, their crowded bathroom counter the toothbrush
+    # holder); declared last so that the objects above keep their start poses.
+    *_objects("cupboard", INSIDE, "dry_pasta", level=0),
+    *_objects("dishwasher", INSIDE, "cup", level=1),
+    *_objects("bookshelf_dining_room", ON, "coffee_filter juice", level=2),
+    *_objects("bookshelf_dining_room", ON, "food_oatmeal ground_coffee food_peanut_butter", level=0),
+    *_objects("kitchen_counter_right", ON, "fryingpan"),
+    *_objects("fridge", INSIDE, "food_chicken", level=2),
     *_objects("kitchen_cabinet", INSIDE, "cleaning_solution", level=0),
-    *_objects("kitchen_cabinet", INSIDE, "washcloth", level=1),
-    *_objects("tvstand_home_office", ON, "radio", level=1),
-    *_objects("bathroom_counter", ON, "toothbrush_holder"),
+    *_objects("sink_dining_room", INSIDE, "washcloth"),
+    *_objects("tvstand_home_office", ON, "radio", level=2),
+    *_objects("bathroom_shelf", ON, "toothbrush_holder", level=2),
     *_objects("bathroom_cabinet", INSIDE, "shaving_cream", level=1),
     _floor("outside", "groceries", -0.7, 3.2),
 )

@@ -126,7 +126,7 @@ _ROWS: tuple[tuple, ...] = (
     ("trashcan", "bin", (0.28, 0.28, 0.30), 1.2, _STEEL, "prop", True),
     ("cup", "cup", (0.08, 0.08, 0.095), 0.22, _CERAMIC),
     ("fryingpan", "pot", (0.28, 0.20, 0.05), 0.8, _DARK),
-    ("coffee_filter", "box", (0.13, 0.07, 0.08), 0.1, _PAPER),
+    ("coffee_filter", "box", (0.12, 0.06, 0.10), 0.1, _PAPER),
     ("ground_coffee", "box", (0.09, 0.06, 0.16), 0.25, _BROWN),
     ("dry_pasta", "box", (0.18, 0.06, 0.22), 0.5, _YELLOW),
     ("food_oatmeal", "cylinder", (0.10, 0.10, 0.18), 0.5, _PAPER),

@@ -11,6 +11,7 @@ import tarfile
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
 import pytest
 import torch
 
@@ -19,6 +20,7 @@ from homer_sim.data.replay import Replayer, find_day_scripts, replay, start_layo
 from homer_sim.data.replay_check import replay_check
 from homer_sim.graph import INSIDE, ON
 from homer_sim.home.apartment import default_layout
+from homer_sim.home.catalog import CATALOG
 from homer_sim.home.placement import start_poses
 from homer_sim.person.aliases import default_resolver
 from homer_sim.person.day_scripts import GraphChange, parse_day_script
@@ -241,6 +243,13 @@ def test_start_layout_moves_objects_to_the_parents_given_where_they_can_stand() 
     assert moved.node_names() == layout.node_names()  # the scene graph's node order is kept
     assert set(start_poses(moved)) == set(declared)
     assert start_layout(layout, {"plate": "bowl", "bowl": "plate"})[1] == ("bowl",)  # not on what stands on it
+    # two on one object lie side by side on its top, not one inside the other
+    both, left = start_layout(layout, {"toothbrush": "toothbrush_holder", "tooth_paste": "toothbrush_holder"})
+    poses = {name: np.array(pose.pos[:2]) for name, pose in start_poses(both).items()}
+    gap = np.linalg.norm(poses["toothbrush"] - poses["tooth_paste"])
+    assert left == () and gap >= (CATALOG["toothbrush"].size[1] + CATALOG["tooth_paste"].size[1]) / 2
+    assert all(np.linalg.norm(poses[name] - poses["toothbrush_holder"]) <= CATALOG["toothbrush_holder"].size[1] / 2
+               for name in ("toothbrush", "tooth_paste"))
 
 
 def test_replay_reports_a_day_that_cannot_run_and_goes_on(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
