@@ -66,7 +66,7 @@ FURNITURE = (
     _f("mat", "mat", "flat", "dining_room", (0.45, 2.3), "E", (0.8, 0.6, 0.01), "decor"),
     # Home office.
     _f("desk_home_office", "desk", "desk", "home_office", (9.6, 1.9), "W", (1.4, 0.7, 0.75)),
-    _f("filing_cabinet", "filing_cabinet", "drawers", "home_office", (9.7, 0.8), "W", (0.5, 0.6, 1.0), drawers=3,
+    _f("filing_cabinet", "filing_cabinet", "drawers", "home_office", (9.64, 0.8), "W", (0.5, 0.6, 1.0), drawers=3,
        rgba=(0.55, 0.57, 0.6, 1.0)),
     _f("chair_home_office", "chair", "chair", "home_office", (9.7, 3.3), "W", (0.5, 0.5, 0.9)),
     _f("bookshelf_home_office", "bookshelf", "shelf", "home_office", (6.8, 0.225), "N", (1.0, 0.35, 1.2),
