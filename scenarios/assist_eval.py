@@ -30,6 +30,7 @@ from homer_sim.data.dataset import Dataset
 from homer_sim.data.generate import Generator, Sources
 from homer_sim.errors import HomerError, unknown_name
 from homer_sim.execution import IN_PROCESS, Backend
+from homer_sim.home.apartment import default_layout
 from model.selection import default_method
 from scenarios.episodes import dataset_day_plan
 from scenarios.policies import OraclePredictor, PsiPolicy
@@ -71,6 +72,7 @@ class DayRunner:
     def __init__(self, spec: EvalSpec) -> None:
         self.spec = spec
         self.dataset = Dataset(spec.data)
+        self.dataset.require_nodes(default_layout().node_names())
         self.generator = Generator(Sources())
         self.env: AssistEnv | None = None
         self.predictors: dict[str, object] = {}
@@ -120,6 +122,7 @@ def assist_eval(spec: EvalSpec, households: Sequence[str] | None = None, days: i
     from tqdm import tqdm
 
     dataset = Dataset(spec.data)
+    dataset.require_nodes(default_layout().node_names())
     names = list(households or dataset.meta.households)
     for name in names:
         if name not in dataset.meta.households:

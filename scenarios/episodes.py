@@ -60,7 +60,9 @@ def _dataset_day(data: str, household: str, index: int = 0, split: str = "test",
                  checkpoints: str | None = None, recording=None) -> Setup:
     from homer_sim.data.dataset import Dataset
     from homer_sim.data.generate import Generator, Sources
+    from homer_sim.home.apartment import default_layout
     dataset = Dataset(data)
+    dataset.require_nodes(default_layout().node_names())
     generator = Generator(Sources())
     plan = dataset_day_plan(dataset, household, index, split, end_min, seed)
     env = AssistEnv(AssistTask([plan], window_min=window_min, reference=generator, recording=recording))

@@ -25,7 +25,7 @@ import io
 import json
 import os
 import zipfile
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -197,3 +197,18 @@ class Dataset:
 
     def load(self, household: str, split: str) -> list[Day]:
         return list(self.days(household, split))
+
+    def require_nodes(self, nodes: Sequence[str]) -> None:
+        """Refuse (DatasetError) a dataset whose nodes are not `nodes`, those of the apartment the caller
+        simulates: a dataset made with another apartment or object catalogue would be replayed and indexed
+        against the wrong bodies."""
+        if tuple(self.meta.nodes) == tuple(nodes):
+            return
+        ours, theirs = tuple(nodes), tuple(self.meta.nodes)
+        first = next((k for k, (a, b) in enumerate(zip(theirs, ours, strict=False)) if a != b), min(len(ours),
+                                                                                               len(theirs)))
+        differ = (f"node {first}: {theirs[first] if first < len(theirs) else 'none'!r} in the dataset, "
+                  f"{ours[first] if first < len(ours) else 'none'!r} here")
+        raise DatasetError(f"{self.root}: made with another apartment or object catalogue ({len(theirs)} nodes, "
+                           f"this apartment has {len(ours)}; first difference at {differ}); generate the dataset "
+                           "again with `homer generate`")

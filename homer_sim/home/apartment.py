@@ -53,6 +53,8 @@ FURNITURE = (
     _f("kitchen_counter_right", "kitchen_counter", "block", "dining_room", (5.0, 0.35), "N", (0.8, 0.6, 0.9)),
     _f("kitchen_cabinet", "kitchen_cabinet", "cabinet", "dining_room", (5.65, 1.4), "W", (0.8, 0.6, 0.9),
        shelves=(0.45,), top_place=True),
+    _f("microwave", "microwave", "cabinet", "dining_room", (5.53, 1.5), "W", (0.5, 0.36, 0.3), "appliance",
+       on="kitchen_cabinet", plinth=0.02, hinge="left", rgba=STEEL, door_mass=1.0),
     _f("coffe_maker", "coffe_maker", "block", "dining_room", (1.85, 0.25), "N", (0.22, 0.25, 0.35), "appliance",
        on="kitchen_counter_left", no_place=True, rgba=(0.1, 0.1, 0.1, 1.0)),
     # Dining and entrance.
@@ -64,6 +66,8 @@ FURNITURE = (
     _f("mat", "mat", "flat", "dining_room", (0.45, 2.3), "E", (0.8, 0.6, 0.01), "decor"),
     # Home office.
     _f("desk_home_office", "desk", "desk", "home_office", (9.6, 1.9), "W", (1.4, 0.7, 0.75)),
+    _f("filing_cabinet", "filing_cabinet", "drawers", "home_office", (9.64, 0.8), "W", (0.5, 0.6, 1.0), drawers=3,
+       rgba=(0.55, 0.57, 0.6, 1.0)),
     _f("chair_home_office", "chair", "chair", "home_office", (9.7, 3.3), "W", (0.5, 0.5, 0.9)),
     _f("bookshelf_home_office", "bookshelf", "shelf", "home_office", (6.8, 0.225), "N", (1.0, 0.35, 1.2),
        shelves=(0.42, 0.82)),
@@ -87,6 +91,8 @@ FURNITURE = (
        rgba=WHITE),
     _f("bathroom_cabinet", "bathroom_cabinet", "cabinet", "bathroom", (3.25, 6.8), "W", (0.8, 0.4, 1.2),
        shelves=(0.45, 0.85), rgba=WHITE),
+    _f("bathroom_shelf", "bathroom_shelf", "shelf", "bathroom", (1.5, 4.725), "N", (0.8, 0.35, 1.0),
+       shelves=(0.45,), rgba=WHITE),
     _f("washing_machine", "washing_machine", "cabinet", "bathroom", (3.15, 5.5), "W", (0.6, 0.6, 0.85),
        "appliance", top_place=True, rgba=WHITE, plinth=0.15),
 )
@@ -136,6 +142,22 @@ OBJECTS = (
     *_objects("bathroom_cabinet", INSIDE, "perfume hairdryer toilet_paper", level=0),
     *_objects("shower", INSIDE, "shampoo conditioner", level=1),
     *_objects("washing_machine", ON, "laundry_detergent", level=1),
+    # The HOMER+ apartment's objects, where its households start them unless that is too full for the robot to
+    # reach in (their cupboard holds also the cup, the oats, the coffee and its filters, the peanut butter, the
+    # juice and the frying pan, their kitchen cabinet the washcloth, their crowded bathroom counter the toothbrush
+    # holder); declared last so that the objects above keep their start poses.
+    *_objects("cupboard", INSIDE, "dry_pasta", level=0),
+    *_objects("dishwasher", INSIDE, "cup", level=1),
+    *_objects("bookshelf_dining_room", ON, "coffee_filter juice", level=2),
+    *_objects("bookshelf_dining_room", ON, "food_oatmeal ground_coffee food_peanut_butter", level=0),
+    *_objects("kitchen_counter_right", ON, "fryingpan"),
+    *_objects("fridge", INSIDE, "food_chicken", level=2),
+    *_objects("kitchen_cabinet", INSIDE, "cleaning_solution", level=0),
+    *_objects("sink_dining_room", INSIDE, "washcloth"),
+    *_objects("tvstand_home_office", ON, "radio", level=2),
+    *_objects("bathroom_shelf", ON, "toothbrush_holder", level=2),
+    *_objects("bathroom_cabinet", INSIDE, "shaving_cream", level=1),
+    _floor("outside", "groceries", -0.7, 3.2),
 )
 
 

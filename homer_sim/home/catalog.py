@@ -86,6 +86,7 @@ _BROWN = (0.45, 0.3, 0.18, 1.0)
 _PINK = (0.9, 0.6, 0.7, 1.0)
 _CLOTH = (0.55, 0.6, 0.7, 1.0)
 _PAPER = (0.95, 0.94, 0.88, 1.0)
+_ORANGE = (0.95, 0.55, 0.1, 1.0)
 
 # name, family, (x, y, z) in m, mass in kg, rgba[, category[, supports]]
 _ROWS: tuple[tuple, ...] = (
@@ -123,6 +124,18 @@ _ROWS: tuple[tuple, ...] = (
     ("trashbag", "cylinder", (0.22, 0.22, 0.28), 1.5, _DARK),
     ("knifeblock", "box", (0.12, 0.10, 0.22), 1.2, _WOOD, "prop"),
     ("trashcan", "bin", (0.28, 0.28, 0.30), 1.2, _STEEL, "prop", True),
+    ("cup", "cup", (0.08, 0.08, 0.095), 0.22, _CERAMIC),
+    ("fryingpan", "pot", (0.28, 0.20, 0.05), 0.8, _DARK),
+    ("coffee_filter", "box", (0.12, 0.06, 0.10), 0.1, _PAPER),
+    ("ground_coffee", "box", (0.09, 0.06, 0.16), 0.25, _BROWN),
+    ("dry_pasta", "box", (0.18, 0.06, 0.22), 0.5, _YELLOW),
+    ("food_oatmeal", "cylinder", (0.10, 0.10, 0.18), 0.5, _PAPER),
+    ("food_peanut_butter", "cylinder", (0.08, 0.08, 0.11), 0.45, _BROWN),
+    ("food_chicken", "box", (0.18, 0.12, 0.06), 0.6, _PINK),
+    ("juice", "box", (0.075, 0.075, 0.24), 1.0, _ORANGE),
+    ("cleaning_solution", "cylinder", (0.08, 0.08, 0.26), 0.8, _GREEN),
+    ("washcloth", "cloth", (0.15, 0.10, 0.02), 0.05, _WHITE),
+    ("groceries", "box", (0.36, 0.20, 0.30), 2.0, _PAPER),
     # bathroom
     ("toothbrush", "utensil", (0.19, 0.02, 0.02), 0.02, _BLUE),
     ("tooth_paste", "box", (0.19, 0.045, 0.035), 0.12, _WHITE),
@@ -139,6 +152,8 @@ _ROWS: tuple[tuple, ...] = (
     ("toilet_paper", "cylinder", (0.11, 0.11, 0.10), 0.12, _WHITE),
     ("razor", "utensil", (0.15, 0.04, 0.02), 0.04, _BLUE),
     ("laundry_detergent", "box", (0.25, 0.15, 0.28), 3.0, _BLUE),
+    ("shaving_cream", "cylinder", (0.055, 0.055, 0.17), 0.3, _WHITE),
+    ("toothbrush_holder", "box", (0.22, 0.10, 0.03), 0.25, _WHITE, "object", True),
     # bedroom
     ("clothes_jacket", "cloth", (0.40, 0.30, 0.08), 1.0, _DARK),
     ("clothes_pants", "cloth", (0.35, 0.28, 0.05), 0.5, _BLUE),
@@ -169,6 +184,7 @@ _ROWS: tuple[tuple, ...] = (
     ("remote_control", "box", (0.18, 0.05, 0.025), 0.12, _DARK),
     ("cd", "flat", (0.142, 0.125, 0.01), 0.08, _GLASS),
     ("cd_player", "box", (0.30, 0.25, 0.08), 2.5, _DARK),
+    ("radio", "box", (0.24, 0.10, 0.14), 1.3, _DARK),
     ("deck_of_cards", "box", (0.09, 0.065, 0.02), 0.1, _RED),
     ("chessboard", "box", (0.40, 0.20, 0.05), 1.0, _WOOD),
     ("instrument_guitar", "box", (1.0, 0.38, 0.10), 2.5, _WOOD),
@@ -182,11 +198,12 @@ _ROWS: tuple[tuple, ...] = (
     ("water_bottle", "cylinder", (0.07, 0.07, 0.24), 0.8, _GLASS),
 )
 
-# Grip features, (length, width, height) in m: carry handles (bag, detergent jug, vacuum cleaner, CD player),
-# a trash bag's tie, a headset's band, and on folded cloth the fold a gripper pinches up (cloth is rigid here,
-# like every object). A robot takes these objects by the feature: their bodies are wider than its grasp.
+# Grip features, (length, width, height) in m: carry handles (bag, grocery bag, detergent jug, vacuum cleaner,
+# CD player), a trash bag's tie, a headset's band, and on folded cloth the fold a gripper pinches up (cloth is
+# rigid here, like every object). A robot takes these objects by the feature: their bodies are wider than its grasp.
 _HANDLES: dict[str, tuple[float, float, float]] = {
     "bag": (0.14, 0.025, 0.06),
+    "groceries": (0.14, 0.025, 0.06),
     "laundry_detergent": (0.10, 0.03, 0.05),
     "vacuum_cleaner": (0.14, 0.03, 0.06),
     "cd_player": (0.18, 0.025, 0.035),

@@ -42,9 +42,12 @@ def yaw_quat(yaw: float) -> tuple[float, float, float, float]:
     return (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
 
 
-def _obstacles_on(layout: Layout, f: Furniture) -> list[tuple[float, float, float, float]]:
-    """Place-frame (x0, y0, x1, y1) rectangles of furniture standing on `f`."""
+def _obstacles_on(layout: Layout, f: Furniture, place: Place) -> list[tuple[float, float, float, float]]:
+    """Place-frame (x0, y0, x1, y1) rectangles of furniture standing on `f`, if `place` is its top (shelves and
+    the inside of a cabinet under an appliance standing on it are free)."""
     rects = []
+    if place.center[2] < f.size[2] - 1e-6:
+        return rects
     for other in layout.furniture:
         if other.on == f.name:
             x0, y0, x1, y1 = footprint(other)
@@ -144,14 +147,27 @@ def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
                 raise LayoutError(f"{decl.name}: an object on the floor of {decl.parent} needs `at` (x, y)")
             poses[decl.name] = StartPose(decl.name, (*decl.at, cls.size[2] / 2 + SPAWN_LIFT), yaw_quat(0.0))
             continue
-        if decl.parent in poses:
-            below = poses[decl.parent]
-            z = below.pos[2] + CATALOG[_decl(layout, decl.parent).cls].size[2] / 2 + cls.size[2] / 2 + SPAWN_LIFT
-            poses[decl.name] = StartPose(decl.name, (below.pos[0], below.pos[1], z), below.quat)
+        if decl.parent in poses:  # on an object: packed on its top, turned as it is
+            below, base = poses[decl.parent], CATALOG[_decl(layout, decl.parent).cls]
+            # the place frame's x runs along the object's y, so what lies on it keeps the object's yaw
+            top = Place(ON, (0.0, 0.0, 0.0), (base.size[1] / 2, base.size[0] / 2), math.inf)
+            spots = taken.setdefault((decl.parent, 0), [])
+            spot = pack_spot(top, cls, spots, step=0.005, centre_first=True)
+            if spot is None and not spots:  # alone, it may reach over the edge (a spoon across a bowl)
+                spot = (0.0, 0.0)
+                spots.append((-top.half_xy[0], -top.half_xy[1], top.half_xy[0], top.half_xy[1]))
+            if spot is None:
+                raise LayoutError(f"{decl.name}: does not fit beside what lies on {decl.parent} (size {cls.size} m)")
+            yaw = 2.0 * math.atan2(below.quat[3], below.quat[0])
+            dx, dy = spot[1], spot[0]  # in the object's frame
+            x = below.pos[0] + math.cos(yaw) * dx - math.sin(yaw) * dy
+            y = below.pos[1] + math.sin(yaw) * dx + math.cos(yaw) * dy
+            z = below.pos[2] + base.size[2] / 2 + cls.size[2] / 2 + SPAWN_LIFT
+            poses[decl.name] = StartPose(decl.name, (x, y, z), below.quat)
             continue
         f = furniture[decl.parent]
         for k, place in _candidate_places(f, decl):
-            spots = taken.setdefault((f.name, k), list(_obstacles_on(layout, f)))
+            spots = taken.setdefault((f.name, k), list(_obstacles_on(layout, f, place)))
             long = lengthwise(f, place, cls)
             # in a cabinet the first declared (the everyday things) stand front and centre, where a hand reaches
             # past the open door and the side walls

@@ -22,7 +22,7 @@ Lookup order, names matched in lower case with surrounding spaces ignored:
 
 A name none of these maps is unknown: a script naming it fails with an error naming the file, line and the
 closest known names. Things that have no counterpart stay unknown rather than being mapped onto something
-merely similar (a frying pan is not our cooking pot).
+merely similar (a sauce pan is not our cooking pot).
 """
 
 from __future__ import annotations

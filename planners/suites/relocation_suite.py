@@ -36,6 +36,7 @@ from homer_sim.clock import GRID_MIN
 from homer_sim.data.dataset import Dataset, Day
 from homer_sim.execution import IN_PROCESS, Backend
 from homer_sim.graph import OUTSIDE
+from homer_sim.home.apartment import default_layout
 from homer_sim.home.catalog import CATALOG
 from planners.suites.collateral import collateral_reason, displaced
 from planners.suites.grasp_suite import stable_hash
@@ -87,6 +88,7 @@ def occurrences(data: Path, households: list[str] | None = None, objects: list[s
     """The first occurrence of every (object, source, destination) move in the training days of the dataset
     at `data` (only `households`' days and `objects`' moves, where given), in household, day and minute order."""
     dataset = Dataset(data)
+    dataset.require_nodes(default_layout().node_names())
     first: dict[tuple[str, str, str], Occurrence] = {}
     for household in households or list(dataset.meta.households):
         for day in dataset.days(household, "train"):
@@ -144,6 +146,7 @@ class Bench:
         self.dataset = Dataset(data)
         self.generator = Generator(Sources())
         self.world = World(extras=[add_avatar, add_robot])
+        self.dataset.require_nodes(self.world.layout.node_names())
         self.executor = Executor(self.world)
         self.containers: dict[str, list[str]] = {}
         for art in self.world.articulations.values():

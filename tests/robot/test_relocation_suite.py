@@ -3,12 +3,15 @@ the whole suite on the 5-household dataset behind the `slow` marker."""
 
 from __future__ import annotations
 
+import json
 import os
+import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from homer_sim.data.dataset import DatasetError
 from homer_sim.data.generate import generate
 from homer_sim.world import World
 from planners.suites.collateral import MAX_DISPLACEMENT, collateral_reason, displaced
@@ -38,6 +41,20 @@ def test_occurrences_are_the_days_moves_each_triple_once(one_day: Path) -> None:
     assert len(triples) == len(set(triples)) > 5
     assert all(o.household == "household_a" and o.index == 0 for o in found)
     assert [o.minute for o in found] == sorted(o.minute for o in found)
+
+
+def test_a_dataset_of_another_apartment_is_refused(one_day: Path, tmp_path: Path) -> None:
+    # A dataset generated before the apartment gained its HOMER+ bodies: the same nodes without the last ones.
+    old = tmp_path / "old"
+    shutil.copytree(one_day, old)
+    meta = json.loads((old / "meta.json").read_text())
+    for key in ("nodes", "categories", "movable"):
+        meta[key] = meta[key][:-13]
+    (old / "meta.json").write_text(json.dumps(meta))
+    with pytest.raises(DatasetError, match=rf"another apartment or object catalogue \({len(meta['nodes'])} nodes, this "
+                                           rf"apartment has {len(meta['nodes']) + 13}.*generate the dataset again"):
+        occurrences(old)
+    occurrences(one_day)  # the dataset of this apartment reads
 
 
 def test_exclusions_name_outside_and_ungraspable_objects() -> None:
