@@ -13,12 +13,12 @@ to the validation counts and reports what each chosen setting does on the test d
 
 `--refit` scores the test days with the predictor refitted on all training days (fit and validation days) at the
 chosen setting, as a method whose fit does not use the validation days could be. `--cross-validate` (implies
-`--refit`) validates on up to `--cv-days` training days instead of the last 10%, each scored by the method fitted on
-all the other training days (leave one day out), so a rule sees several days even when there are only 5.
+`--refit`) validates on the training days `model.evaluate.cv_folds` holds out (up to 10) instead of the last 10%,
+each scored by the method fitted on all the other training days, so a rule sees several days even with only 5.
 One JSON object on stdout; `--counts FILE` also keeps every setting's counts (JSON) to try other rules on.
 
     .venv/bin/python benchmarks/tuning_rules.py --data DATA [--train-days 5] [--method analogs] [--refit]
-        [--cross-validate [--cv-days 10]] [--counts FILE]
+        [--cross-validate] [--counts FILE]
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks._common import emit  # noqa: E402
 from homer_sim.data.dataset import Dataset  # noqa: E402
-from model.evaluate import HEADLINE_WINDOW_MIN, household_split, rollout_queries  # noqa: E402
+from model.evaluate import HEADLINE_WINDOW_MIN, FitSpec, cv_folds, household_split, rollout_queries  # noqa: E402
 from model.methods import make_predictor  # noqa: E402
 from model.metrics import Counts, day_queries, gate, score, window_steps  # noqa: E402
 
@@ -58,23 +58,19 @@ def _pooled(days: list[Counts]) -> float:
 
 
 def settings(dataset: Dataset, house: str, method: str, train_days: int | None, refit: bool,
-             cv_days: int = 0) -> list[tuple[list[Counts], Counts]]:
-    """(validation counts per validation day, test counts) of every setting of the method's grid; cv_days > 0:
-    validation on that many training days, each held out from its own fit (see --cross-validate)."""
+             cross_validate: bool = False) -> list[tuple[list[Counts], Counts]]:
+    """(validation counts per validation day, test counts) of every setting of the method's grid; cross_validate:
+    validation on model.evaluate's held-out training days, each held out of its own fit (see --cross-validate)."""
     steps = window_steps(HEADLINE_WINDOW_MIN, dataset.meta.grid_min)
     fit, val, test, _ = household_split(dataset, house, train_days)
-    if cv_days:
-        train = fit + val
-        held = sorted(set(np.linspace(0, len(train) - 1, min(cv_days, len(train))).round().astype(int)))
-        folds = [(make_predictor(method, dataset.meta, progress=False), train[i]) for i in held]
-        for predictor, day in folds:
-            predictor.fit([d for d in train if d is not day], [day])
+    if cross_validate:
+        folds = cv_folds(FitSpec(method, tuple(fit), tuple(val)), dataset.meta)
     else:
         tuned = make_predictor(method, dataset.meta, progress=False)
         tuned.fit(fit, val)
         folds = [(tuned, day) for day in val]
     scored = make_predictor(method, dataset.meta, progress=False)
-    scored.fit(fit + val if refit or cv_days else fit, val)
+    scored.fit(fit + val if refit or cross_validate else fit, val)
     val_queries = [day_queries([d], steps) for _, d in folds]
     test_queries = day_queries(test, steps)
     names = [k for k in scored.grid if k != "threshold"]
@@ -99,18 +95,16 @@ def main() -> None:
     parser.add_argument("--method", default="analogs", help="method (analogs)")
     parser.add_argument("--refit", action="store_true", help="score the test days refitted on all training days")
     parser.add_argument("--cross-validate", action="store_true", help="validate on held-out training days")
-    parser.add_argument("--cv-days", type=int, default=10, help="training days held out in turn (10)")
     parser.add_argument("--counts", type=Path, default=None, help="also write every setting's counts here")
     args = parser.parse_args()
     dataset = Dataset(args.data)
-    cv_days = args.cv_days if args.cross_validate else 0
-    per_house = {h: settings(dataset, h, args.method, args.train_days, args.refit, cv_days)
+    per_house = {h: settings(dataset, h, args.method, args.train_days, args.refit, args.cross_validate)
                  for h in dataset.meta.households}
     if args.counts is not None:
         args.counts.write_text(json.dumps({h: [([asdict(c) for c in val], asdict(test)) for val, test in rows]
                                            for h, rows in per_house.items()}))
-    result = {"method": args.method, "train_days": args.train_days, "refit": args.refit or bool(cv_days),
-              "cross_validation_days": cv_days, "rules": {}}
+    result = {"method": args.method, "train_days": args.train_days, "refit": args.refit or args.cross_validate,
+              "cross_validate": args.cross_validate, "rules": {}}
     for name, admissible in RULES.items():
         chosen = {}
         for house, rows in per_house.items():  # the best objective among admissible settings, earliest on ties
