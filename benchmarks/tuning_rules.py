@@ -12,16 +12,22 @@ to the validation counts and reports what each chosen setting does on the test d
   plus 0.2 points).
 
 `--refit` scores the test days with the predictor refitted on all training days (fit and validation days) at the
-chosen setting, as a method whose fit does not use the validation days could be. One JSON object on stdout.
+chosen setting, as a method whose fit does not use the validation days could be. `--cross-validate` (implies
+`--refit`) validates on the training days `model.evaluate.cv_folds` holds out (up to 10) instead of the last 10%,
+each scored by the method fitted on all the other training days, so a rule sees several days even with only 5.
+One JSON object on stdout; `--counts FILE` also keeps every setting's counts (JSON) to try other rules on.
 
     .venv/bin/python benchmarks/tuning_rules.py --data DATA [--train-days 5] [--method analogs] [--refit]
+        [--cross-validate] [--counts FILE]
 """
 
 from __future__ import annotations
 
 import argparse
 import itertools
+import json
 import sys
+from dataclasses import asdict
 from functools import partial
 from pathlib import Path
 
@@ -31,7 +37,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks._common import emit  # noqa: E402
 from homer_sim.data.dataset import Dataset  # noqa: E402
-from model.evaluate import HEADLINE_WINDOW_MIN, household_split, rollout_queries  # noqa: E402
+from model.evaluate import HEADLINE_WINDOW_MIN, FitSpec, cv_folds, household_split, rollout_queries  # noqa: E402
 from model.methods import make_predictor  # noqa: E402
 from model.metrics import Counts, day_queries, gate, score, window_steps  # noqa: E402
 
@@ -51,26 +57,31 @@ def _pooled(days: list[Counts]) -> float:
     return _pct(sum(days, Counts()))
 
 
-def settings(dataset: Dataset, house: str, method: str, train_days: int | None, refit: bool
-             ) -> list[tuple[list[Counts], Counts]]:
-    """(validation counts per validation day, test counts) of every setting of the method's grid."""
+def settings(dataset: Dataset, house: str, method: str, train_days: int | None, refit: bool,
+             cross_validate: bool = False) -> list[tuple[list[Counts], Counts]]:
+    """(validation counts per validation day, test counts) of every setting of the method's grid; cross_validate:
+    validation on model.evaluate's held-out training days, each held out of its own fit (see --cross-validate)."""
     steps = window_steps(HEADLINE_WINDOW_MIN, dataset.meta.grid_min)
     fit, val, test, _ = household_split(dataset, house, train_days)
-    tuned = make_predictor(method, dataset.meta, progress=False)
-    tuned.fit(fit, val)
+    if cross_validate:
+        folds = cv_folds(FitSpec(method, tuple(fit), tuple(val)), dataset.meta)
+    else:
+        tuned = make_predictor(method, dataset.meta, progress=False)
+        tuned.fit(fit, val)
+        folds = [(tuned, day) for day in val]
     scored = make_predictor(method, dataset.meta, progress=False)
-    scored.fit(fit + val if refit else fit, val)
-    val_queries = [day_queries([d], steps) for d in val]
+    scored.fit(fit + val if refit or cross_validate else fit, val)
+    val_queries = [day_queries([d], steps) for _, d in folds]
     test_queries = day_queries(test, steps)
-    names = [k for k in tuned.grid if k != "threshold"]
+    names = [k for k in scored.grid if k != "threshold"]
     rows = []
-    for values in itertools.product(*(tuned.grid[k] for k in names)):
-        for predictor in (tuned, scored):
+    for values in itertools.product(*(scored.grid[k] for k in names)):
+        for predictor in (*(p for p, _ in folds), scored):
             predictor.set_params(**dict(zip(names, values, strict=True)))
-        val_rollouts = [rollout_queries(tuned, q, steps) for q in val_queries]
+        val_rollouts = [rollout_queries(p, q, steps) for (p, _), q in zip(folds, val_queries, strict=True)]
         test_rollout = rollout_queries(scored, test_queries, steps)
-        for threshold in tuned.grid["threshold"]:
-            rows.append(([score(q, gate(r, q.observed, threshold), steps, tuned.movable)
+        for threshold in scored.grid["threshold"]:
+            rows.append(([score(q, gate(r, q.observed, threshold), steps, scored.movable)
                           for q, r in zip(val_queries, val_rollouts, strict=True)],
                          score(test_queries, gate(test_rollout, test_queries.observed, threshold), steps,
                                scored.movable)))
@@ -83,10 +94,17 @@ def main() -> None:
     parser.add_argument("--train-days", type=int, default=None, help="only the first N training days (all)")
     parser.add_argument("--method", default="analogs", help="method (analogs)")
     parser.add_argument("--refit", action="store_true", help="score the test days refitted on all training days")
+    parser.add_argument("--cross-validate", action="store_true", help="validate on held-out training days")
+    parser.add_argument("--counts", type=Path, default=None, help="also write every setting's counts here")
     args = parser.parse_args()
     dataset = Dataset(args.data)
-    per_house = {h: settings(dataset, h, args.method, args.train_days, args.refit) for h in dataset.meta.households}
-    result = {"method": args.method, "train_days": args.train_days, "refit": args.refit, "rules": {}}
+    per_house = {h: settings(dataset, h, args.method, args.train_days, args.refit, args.cross_validate)
+                 for h in dataset.meta.households}
+    if args.counts is not None:
+        args.counts.write_text(json.dumps({h: [([asdict(c) for c in val], asdict(test)) for val, test in rows]
+                                           for h, rows in per_house.items()}))
+    result = {"method": args.method, "train_days": args.train_days, "refit": args.refit or args.cross_validate,
+              "cross_validate": args.cross_validate, "rules": {}}
     for name, admissible in RULES.items():
         chosen = {}
         for house, rows in per_house.items():  # the best objective among admissible settings, earliest on ties

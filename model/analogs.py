@@ -13,8 +13,10 @@ t_j, parents F_j(s) s steps later):
 
 Only analogs where object o sat where it sits now count for o; `a` (stay_prior) keeps an object in place when its
 situation was never seen. lambda = 0 is a direct multi-step, per-object, time-of-day transition table. Tunables
-(sigma_min, lambda, stay_prior, threshold) are chosen on validation days like every method's (model.evaluate).
-Training stores the fit days' movable parents (int16); nothing is learned by gradient.
+(sigma_min, lambda, stay_prior, threshold) are chosen by the rule every method's are (model.evaluate), on up to
+CV_DAYS training days each left out of the fit it is scored with (fitting is only storing days), and the predictor
+is then fitted on all training days. Training stores the days' movable parents (int16); nothing is learned by
+gradient.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ class Analogs(Predictor):
     """Kernel-weighted analogs of (time of day, arrangement); direct multi-step prediction per object."""
 
     method = "analogs"
+    cross_validated = True
     grid = {"threshold": THRESHOLDS, "sigma_min": (10.0, 5.0, 20.0, 40.0), "similarity": (0.5, 0.0, 1.0, 2.0),
             "stay_prior": (0.1, 0.02, 0.5)}
 
@@ -47,7 +50,7 @@ class Analogs(Predictor):
         super().__init__(meta, **params)
 
     def fit(self, fit_days: Sequence[Day], val_days: Sequence[Day]) -> None:
-        """Store the fit days' arrangements (validation days are for tuning only)."""
+        """Store the fit days' arrangements (`val_days` unused)."""
         if not fit_days:
             raise ModelError("no days to learn from; give at least one training day")
         self.load_state({"states": np.concatenate([d.parent[:, self.rows] for d in fit_days]),

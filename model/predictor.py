@@ -97,6 +97,7 @@ class Predictor(ABC):
 
     method = "predictor"
     grid: dict[str, tuple[float, ...]] = {}
+    cross_validated = False  # cheap to fit: tuned by leaving training days out in turn (model.evaluate.cv_folds)
 
     def __init__(self, meta: DatasetMeta, **params: float) -> None:
         self.meta = meta

@@ -22,7 +22,8 @@ class Fitted(NamedTuple):
 def predictor_for(dataset, household: str, method: str | None, window_min: int, checkpoints: Path,
                   progress: bool = False) -> Fitted:
     """The household's predictor fitted on its training days (all but the last tenth, which are its validation
-    days) and tuned on the validation days at `window_min`, cached under `checkpoints` as `homer evaluate` caches
+    days; a cross-validated method such as analogs on all of them, see `model.evaluate`) and tuned on the
+    validation days at `window_min`, cached under `checkpoints` as `homer evaluate` caches
     it (fitted on the first call, loaded after), with its checkpoint info. method None: the best validated method
     of the validation table (`model.selection`). Tuned for the paper's objective (reported) and then for the
     assistance objective, whose threshold the predictor keeps: the robot's (see `thresholds`)."""

@@ -61,3 +61,19 @@ def test_checkpoint_round_trip_gives_the_same_forecast(tmp_path: Path) -> None:
     for cup, minute in ((TABLE, 600), (SHELF, 470), (TABLE, 1430)):
         np.testing.assert_array_equal(loaded.forecast(*_query(cup, minute)[0], minute, 6),
                                       predictor.forecast(*_query(cup, minute)[0], minute, 6))
+
+
+def test_tuning_holds_each_validation_day_out_of_its_fit_then_fits_all_days() -> None:
+    from model.evaluate import CV_DAYS, FitSpec, cv_days, cv_folds, fit_and_tune
+
+    days = tuple(_day(i) for i in range(12))
+    spec = FitSpec("analogs", days[:-1], days[-1:])
+    held = cv_days(spec)
+    assert len(held) == CV_DAYS and held[0] is days[0] and held[-1] is days[-1]
+    for fold, day in cv_folds(spec, META):
+        assert len(fold.states) == sum(d.steps for d in days) - day.steps  # the held day is not among its analogs
+    predictor, info, fresh = fit_and_tune(spec, META, 30, progress=False)
+    assert fresh and info["fit_days"] == 12 and info["val_days"] == 0 and info["cross_validation_days"] == CV_DAYS
+    assert len(predictor.states) == sum(d.steps for d in days)
+    # The routine is foreseen on days the folds never stored: the objective there is well above nothing predicted.
+    assert info["tunings"]["paper@30"]["val_score"] > 50.0
