@@ -164,7 +164,8 @@ def _objects_of(activities: tuple[str, ...]) -> list[str]:
 
 
 def make_apartment(size: str = "real") -> Apartment:
-    """The full apartment (`size="real"`, 123 nodes) or a small one for fast tests (`"small"`, about 30 nodes)."""
+    """The full apartment (`size="real"`, every node of the default layout) or a small one for fast tests
+    (`"small"`, about 30 nodes)."""
     objects = list(HOME) if size == "real" else _objects_of(SMALL_ACTIVITIES)
     places = {HOME[o] for o in objects} | {d for a in SCRIPTS for s in SCRIPTS[a][1] for _, o, d in s if o in objects}
     furniture = [f for f in FURNITURE if size == "real" or f in places or f == "coffe_maker"]

@@ -11,6 +11,7 @@ import pytest
 
 from homer_sim.data.dataset import Dataset
 from homer_sim.graph import validate_in_tree
+from homer_sim.home.apartment import default_layout
 from model.synthetic import make_apartment, write_synthetic_dataset
 from scenarios.cli.model import add_commands
 
@@ -80,7 +81,8 @@ def test_bad_window_names_the_value(data: Path) -> None:
 
 def test_synthetic_apartment_has_the_real_size_and_valid_days(tmp_path: Path) -> None:
     apartment = make_apartment("real")
-    assert len(apartment.nodes) == 123 and sum(apartment.movable) == 87
+    layout = default_layout()
+    assert set(apartment.nodes) == set(layout.node_names()) and sum(apartment.movable) == len(layout.objects)
     meta = write_synthetic_dataset(tmp_path, np.random.default_rng(0), households=1, train_days=3, test_days=1)
     days = Dataset(tmp_path).load(meta.households[0], "train")
     for day in days:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from homer_sim.home.apartment import default_layout
 from homer_sim.recording import read_recording
 from scenarios.cli.main import main
 
@@ -20,7 +21,7 @@ def test_world_info_json_shape(capsys) -> None:
     info = _json(capsys, ["world", "info", "--json"])
     assert {"name", "category", "movable"} <= set(info["nodes"][0])
     assert {a["joint_type"] for a in info["articulations"]} == {"hinge", "slide"}
-    assert sum(n["movable"] for n in info["nodes"]) == 87
+    assert sum(n["movable"] for n in info["nodes"]) == len(default_layout().objects)
 
 
 def test_world_check_writes_a_recording(capsys, tmp_path: Path) -> None:
