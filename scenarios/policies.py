@@ -110,6 +110,7 @@ class PsiPolicy:
         self.holds = Holds()
         self.returns: dict[str, Relocation] = {}  # unused help to put back, until tried or the person moves it
         self.failed: dict[str, tuple[float, str, str]] = {}  # object -> (retry after minute, cause, where it was)
+        self.unwanted: dict[str, str] = {}  # object -> where its unused help was put back
         self.plans: list[tuple[int, Plan]] = []
         self._asked: dict[str, Relocation] = {}
 
@@ -158,6 +159,8 @@ class PsiPolicy:
                                                                    0, float("nan"))
             if relocation.put_back:  # tried once: if it failed, the predictor decides from now on
                 self.returns.pop(relocation.obj, None)
+                if done:  # not offered again until the person moves it (else help and put-back take turns all day)
+                    self.unwanted[relocation.obj] = nodes[ended]
             if done and not relocation.put_back:
                 self.holds.add(relocation.obj, nodes[ended], minute, minute + self.window_min,
                                source=relocation.source)
@@ -171,6 +174,8 @@ class PsiPolicy:
         reason = self.scene.ungraspable.get(obj)
         if reason is not None:
             return f"not graspable: {reason}"
+        if self.unwanted.get(obj) == graph.parent_of(obj):
+            return "its help went unused and was put back; not offered again until the person moves it"
         retry_after, why, where = self.failed.get(obj, (-np.inf, "", ""))
         if minute >= retry_after or graph.parent_of(obj) != where:  # waited long enough, or moved since
             return None

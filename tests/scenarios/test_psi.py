@@ -212,6 +212,28 @@ def test_a_failure_in_the_object_itself_waits_until_it_is_moved_others_a_window(
     assert policy._excluded("milk", 900, _graph(milk="table")) is None  # the person moved it
 
 
+def test_help_put_back_unused_is_not_offered_again_until_the_person_moves_it() -> None:
+    """A relocation of the robot's unused help back to its source, once done, keeps the object from being planned
+    again: the same prediction would bring it out and the same window put it back, all day."""
+    from types import SimpleNamespace
+
+    from scenarios.policies import PsiPolicy
+    from scenarios.psi import Relocation
+    from scenarios.task import NO_RELOCATION
+
+    scene = SimpleNamespace(nodes=NODES, index=IDX, ungraspable={})
+    policy = PsiPolicy(scene, SimpleNamespace(params={"threshold": 0.5}), window_min=30)
+    graph = _graph()
+    home = graph.parent_of("bowl")
+    policy._asked = {"bowl": Relocation("bowl", "table", home, 0, 1.0, put_back=True)}
+    outcomes = np.full((4, 7), NO_RELOCATION, dtype=np.int32)
+    outcomes[0] = (IDX["bowl"], IDX["table"], IDX[home], 1, IDX[home], 0, 400)
+    policy._learn(outcomes, graph)
+    assert "not offered again" in policy._excluded("bowl", 900, graph)
+    assert policy._excluded("milk", 900, graph) is None  # only that object
+    assert policy._excluded("bowl", 900, _graph(bowl="table")) is None  # the person moved it
+
+
 def test_a_relocation_waiting_for_the_person_is_counted_when_it_can_no_longer_be_done() -> None:
     """A relocation the person stood in the way of waits for the next snapshot (`Helper.waiting`); if the person
     moves the object meanwhile, or the day ends first, it is recorded as not done, the person in the way its
