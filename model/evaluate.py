@@ -58,11 +58,16 @@ def split_days(days: Sequence[Day], val_fraction: float = VAL_FRACTION) -> tuple
     return list(days[:-n_val]), list(days[-n_val:])
 
 
+def _joined(parts: Sequence, axis: int = 0):
+    """Rollouts (joined along the query axis, 1) or Queries (axis 0): each field of `parts` concatenated."""
+    kind = type(parts[0])
+    return kind(*(np.concatenate([getattr(p, f.name) for p in parts], axis=axis) for f in fields(kind)))
+
+
 def rollout_queries(predictor: Predictor, queries: Queries, steps: int) -> Rollout:
     """predictor.rollout over all queries, in chunks of QUERY_CHUNK."""
-    parts = [predictor.rollout(queries.observed[s:s + QUERY_CHUNK], queries.minute[s:s + QUERY_CHUNK], steps)
-             for s in range(0, len(queries), QUERY_CHUNK)]
-    return Rollout(*(np.concatenate([getattr(p, f.name) for p in parts], axis=1) for f in fields(Rollout)))
+    return _joined([predictor.rollout(queries.observed[s:s + QUERY_CHUNK], queries.minute[s:s + QUERY_CHUNK], steps)
+                    for s in range(0, len(queries), QUERY_CHUNK)], axis=1)
 
 
 def tune(predictor: Predictor, queries: Queries | Sequence[tuple[Predictor, Queries]], steps: int,
@@ -84,15 +89,14 @@ def tune_targets(predictor: Predictor, queries: Queries | Sequence[tuple[Predict
     combination of the other tunables scores every threshold, for every target. `queries` may instead be folds,
     (predictor fitted without these queries' days, queries), scored pooled (cross-validation, `cv_folds`)."""
     folds = [(predictor, queries)] if isinstance(queries, Queries) else list(queries)
-    queries = Queries(*(np.concatenate([getattr(q, f.name) for _, q in folds]) for f in fields(Queries)))
+    queries = _joined([q for _, q in folds])
     names = [k for k in predictor.grid if k != "threshold"]
     thresholds = predictor.grid.get("threshold", (predictor.params["threshold"],))
     scored: dict[str, list[tuple[bool, float, int, dict[str, float]]]] = {t: [] for t in targets}
     for values in itertools.product(*(predictor.grid[k] for k in names)):
         for fold, _ in folds:
             fold.set_params(**dict(zip(names, values, strict=True)))
-        parts = [rollout_queries(fold, q, steps) for fold, q in folds]
-        rollout = Rollout(*(np.concatenate([getattr(p, f.name) for p in parts], axis=1) for f in fields(Rollout)))
+        rollout = _joined([rollout_queries(fold, q, steps) for fold, q in folds], axis=1)
         for threshold in thresholds:
             predicted = gate(rollout, queries.observed, threshold)
             params = {**dict(zip(names, values, strict=True)), "threshold": float(threshold)}
