@@ -16,8 +16,6 @@ name before its first '/' (see `homer_sim.observe`).
 
 from __future__ import annotations
 
-import math
-
 import mujoco
 import numpy as np
 
@@ -152,9 +150,3 @@ def build_spec(layout: Layout) -> mujoco.MjSpec:
         _add_furniture(spec, layout, f)
     _add_objects(spec, layout)
     return spec
-
-
-def yaw_of(quat: np.ndarray) -> float:
-    """Yaw (rad) of a wxyz quaternion."""
-    w, x, y, z = quat
-    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))

@@ -42,6 +42,12 @@ def yaw_quat(yaw: float) -> tuple[float, float, float, float]:
     return (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
 
 
+def yaw_of(quat) -> float:
+    """Yaw (rad) of a wxyz quaternion (the inverse of `yaw_quat` for a turn about z)."""
+    w, x, y, z = quat
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
 def _obstacles_on(layout: Layout, f: Furniture, place: Place) -> list[tuple[float, float, float, float]]:
     """Place-frame (x0, y0, x1, y1) rectangles of furniture standing on `f`, if `place` is its top (shelves and
     the inside of a cabinet under an appliance standing on it are free)."""
@@ -158,7 +164,7 @@ def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
                 spots.append((-top.half_xy[0], -top.half_xy[1], top.half_xy[0], top.half_xy[1]))
             if spot is None:
                 raise LayoutError(f"{decl.name}: does not fit beside what lies on {decl.parent} (size {cls.size} m)")
-            yaw = 2.0 * math.atan2(below.quat[3], below.quat[0])
+            yaw = yaw_of(below.quat)
             dx, dy = spot[1], spot[0]  # in the object's frame
             x = below.pos[0] + math.cos(yaw) * dx - math.sin(yaw) * dy
             y = below.pos[1] + math.sin(yaw) * dx + math.cos(yaw) * dy
