@@ -67,9 +67,12 @@ def cmd_simulate_day(args: argparse.Namespace) -> int:
     return 0
 
 def cmd_compat_check(args: argparse.Namespace) -> int:
-    from homer_sim.person.compat import compat_check
+    from homer_sim.person.compat import compat_check, compat_check_texts, homer_plus_scripts
 
-    result = compat_check(args.scripts, progress=not args.json)
+    if args.from_homer_plus is not None:
+        result = compat_check_texts(homer_plus_scripts(args.from_homer_plus), progress=not args.json)
+    else:
+        result = compat_check(args.scripts, progress=not args.json)
     share = result["executed"] / result["scripts"]
     lines = [f"{result['executed']} of {result['scripts']} scripts executed ({share:.0%})"]
     lines += [f"  {f['script']}:{f['line']}: {f['reason']}" for f in result["failures"]]
@@ -165,7 +168,11 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     day.set_defaults(func=cmd_simulate_day)
 
     compat = subparsers.add_parser("compat-check", help="run every script of a HOMER-style folder in our apartment")
-    compat.add_argument("--scripts", type=Path, required=True, help="folder laid out <activity>/<name>.txt")
+    source = compat.add_mutually_exclusive_group(required=True)
+    source.add_argument("--scripts", type=Path, help="folder laid out <activity>/<name>.txt")
+    source.add_argument("--from-homer-plus", type=Path, metavar="HOUSEHOLD",
+                        help="the activity scripts embedded in a HOMER+ household's day scripts (each distinct "
+                        "'### <activity>-<variant>.txt' block once; a HouseholdX folder or a folder of NNN.txt)")
     compat.add_argument("--json", action="store_true", help="print one JSON object")
     compat.set_defaults(func=cmd_compat_check)
 
