@@ -31,7 +31,8 @@ CAVITY_FAMILIES = ("bowl", "cup", "mug", "pot", "bin")
 CATEGORIES = ("object", "prop")
 MIN_EXTENT = 0.005  # m, smallest allowed bounding-box extent
 MAX_FOOTPRINT = 0.45  # m, largest footprint side for ordinary classes
-LONG_CLASSES = ("comforter", "blanket", "instrument_guitar", "vacuum_cleaner")  # may be up to 1.0 m long
+# may be up to 1.0 m long
+LONG_CLASSES = ("comforter", "blanket", "instrument_guitar", "instrument_violin", "vacuum_cleaner")
 MAX_LONG_SIDE = 1.0  # m
 
 
@@ -136,6 +137,12 @@ _ROWS: tuple[tuple, ...] = (
     ("cleaning_solution", "cylinder", (0.08, 0.08, 0.26), 0.8, _GREEN),
     ("washcloth", "cloth", (0.15, 0.10, 0.02), 0.05, _WHITE),
     ("groceries", "box", (0.36, 0.20, 0.30), 2.0, _PAPER),
+    # classes HOMER's activity scripts name beyond its graph and HOMER+
+    ("food_egg", "box", (0.24, 0.10, 0.07), 0.5, _PAPER),  # a carton of six
+    ("sauce_pan", "pot", (0.26, 0.16, 0.10), 0.9, _STEEL),
+    ("chef_knife", "utensil", (0.30, 0.045, 0.02), 0.2, _STEEL),
+    ("paper_towel", "cylinder", (0.12, 0.12, 0.28), 0.3, _WHITE),
+    ("dishrack", "bin", (0.40, 0.32, 0.10), 1.0, _STEEL, "prop", True),
     # bathroom
     ("toothbrush", "utensil", (0.19, 0.02, 0.02), 0.02, _BLUE),
     ("tooth_paste", "box", (0.19, 0.045, 0.035), 0.12, _WHITE),
@@ -154,6 +161,9 @@ _ROWS: tuple[tuple, ...] = (
     ("laundry_detergent", "box", (0.25, 0.15, 0.28), 3.0, _BLUE),
     ("shaving_cream", "cylinder", (0.055, 0.055, 0.17), 0.3, _WHITE),
     ("toothbrush_holder", "box", (0.22, 0.10, 0.03), 0.25, _WHITE, "object", True),
+    ("mouthwash", "cylinder", (0.08, 0.08, 0.22), 0.6, _GREEN),
+    ("face_soap", "box", (0.09, 0.06, 0.035), 0.12, _WHITE),
+    ("comb", "utensil", (0.18, 0.03, 0.01), 0.02, _DARK),
     # bedroom
     ("clothes_jacket", "cloth", (0.40, 0.30, 0.08), 1.0, _DARK),
     ("clothes_pants", "cloth", (0.35, 0.28, 0.05), 0.5, _BLUE),
@@ -170,9 +180,18 @@ _ROWS: tuple[tuple, ...] = (
     ("bag", "box", (0.35, 0.15, 0.30), 0.8, _BROWN),
     ("wallet", "box", (0.11, 0.09, 0.02), 0.1, _BROWN),
     ("slippers", "box", (0.28, 0.20, 0.06), 0.4, _PINK),
+    ("clothes_gloves", "cloth", (0.22, 0.12, 0.03), 0.1, _DARK),
+    ("clothes_hat", "cloth", (0.20, 0.14, 0.06), 0.1, _RED),  # a folded knit hat
+    ("clothes_scarf", "cloth", (0.30, 0.12, 0.04), 0.2, _BLUE),
+    ("clothes_skirt", "cloth", (0.30, 0.22, 0.04), 0.3, _PINK),
+    ("clothes_underwear", "cloth", (0.14, 0.10, 0.03), 0.05, _WHITE),
+    ("pajamas", "cloth", (0.32, 0.24, 0.05), 0.4, _CLOTH),
     # office and living
     ("book", "box", (0.23, 0.15, 0.03), 0.5, _RED),
     ("notebook", "box", (0.21, 0.15, 0.012), 0.2, _BLUE),
+    ("note_pad", "box", (0.15, 0.10, 0.015), 0.1, _YELLOW),
+    ("pencil", "utensil", (0.18, 0.012, 0.012), 0.01, _YELLOW),
+    ("bookmark", "flat", (0.15, 0.045, 0.005), 0.005, _RED),
     ("pen", "utensil", (0.14, 0.012, 0.012), 0.01, _BLUE),
     ("highlighter", "utensil", (0.12, 0.018, 0.018), 0.015, _YELLOW),
     ("headset", "box", (0.19, 0.17, 0.08), 0.3, _DARK),
@@ -188,6 +207,7 @@ _ROWS: tuple[tuple, ...] = (
     ("deck_of_cards", "box", (0.09, 0.065, 0.02), 0.1, _RED),
     ("chessboard", "box", (0.40, 0.20, 0.05), 1.0, _WOOD),
     ("instrument_guitar", "box", (1.0, 0.38, 0.10), 2.5, _WOOD),
+    ("instrument_violin", "box", (0.62, 0.24, 0.11), 1.5, _DARK),  # in its case
     ("keys", "box", (0.08, 0.03, 0.015), 0.06, _STEEL),
     ("mail", "flat", (0.23, 0.11, 0.005), 0.03, _PAPER),
     ("magazine", "flat", (0.28, 0.21, 0.006), 0.25, _PAPER),
@@ -199,8 +219,9 @@ _ROWS: tuple[tuple, ...] = (
 )
 
 # Grip features, (length, width, height) in m: carry handles (bag, grocery bag, detergent jug, vacuum cleaner,
-# CD player), a trash bag's tie, a headset's band, and on folded cloth the fold a gripper pinches up (cloth is
-# rigid here, like every object). A robot takes these objects by the feature: their bodies are wider than its grasp.
+# CD player, violin case), a trash bag's tie, a headset's band, and on folded cloth the fold a gripper pinches up
+# (cloth is rigid here, like every object). A robot takes these objects by the feature: their bodies are wider than
+# its grasp.
 _HANDLES: dict[str, tuple[float, float, float]] = {
     "bag": (0.14, 0.025, 0.06),
     "groceries": (0.14, 0.025, 0.06),
@@ -214,6 +235,9 @@ _HANDLES: dict[str, tuple[float, float, float]] = {
     "clothes_pants": (0.26, 0.03, 0.025),
     "clothes_dress": (0.26, 0.03, 0.02),
     "clothes_jacket": (0.30, 0.04, 0.035),
+    "clothes_skirt": (0.22, 0.03, 0.02),
+    "pajamas": (0.24, 0.03, 0.02),
+    "instrument_violin": (0.14, 0.025, 0.04),  # the case's handle
     "blanket": (0.40, 0.04, 0.04),
     "comforter": (0.50, 0.05, 0.06),
 }

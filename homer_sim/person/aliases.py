@@ -11,14 +11,16 @@ Lookup order, names matched in lower case with surrounding spaces ignored:
    those; 119 (the sink's, where their scripts put most things) is our right one. Going by what the counters
    stand beside instead (our left one is beside our sink, the right one beside our stove) puts 119 and 122 on
    our left counter, which is then too full for what the authors set down there (replay-check on household A:
-   92.1% agreement over what we have, against 92.8%). null marks an instance we have no counterpart for yet
-   (their bedroom chair, 194): it is unknown even though its class name alone would resolve.
+   92.1% agreement over what we have, against 92.8%). null would mark an instance we have no counterpart for:
+   it is unknown even though its class name alone would resolve (none at present: their bedroom chair, 194, is
+   our `chair_bedroom`).
 2. the exact node name;
 3. `aliases` (name -> node): HOMER/VirtualHome names of things we have under another name, mostly class names
    without our instance suffix (`table` -> `table_dining_room`) and other spellings of one thing
    (`water_glass` -> `drinking_glass`, `phone` -> `cellphone`);
 4. `scenery` (name -> node): things scripts name that never move and are not nodes of ours, mapped to the
-   furniture or room they belong to (a faucet to its sink, a light to its room), so the person goes there.
+   furniture or room they belong to (a faucet to its sink, a light, a curtain or a door to its room), so the
+   person goes there.
 
 A name none of these maps is unknown: a script naming it fails with an error naming the file, line and the
 closest known names. Things that have no counterpart stay unknown rather than being mapped onto something

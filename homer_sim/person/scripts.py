@@ -11,7 +11,8 @@ A script is a list of blocks. `## <min>-<max>` opens a block whose duration rang
 
 Action lines are `[Verb]`, `[Verb] <arg>` or `[Verb] <arg1> <arg2>` (no space needed between `]`, `>` and
 `<`; a VirtualHome instance id such as `<table> (114)` is passed to the resolver, which maps the HOMER+ apartment's
-instances and otherwise goes by the name). Verbs are case-insensitive.
+instances and otherwise goes by the name). HOMER's crowd-sourced scripts sometimes leave the brackets out,
+`Switchoff <light_bedroom>`: a verb followed by arguments is read the same. Verbs are case-insensitive.
 Blank lines, `#` comments (a `#` not followed by another `#`) and annotation lines starting with `+<` or `-<`
 are ignored. Names are resolved to node names by a callable (see `homer_sim.person.aliases.Resolver`).
 
@@ -115,6 +116,7 @@ class Script:
 _NUMBER = r"(\d+(?:\.\d*)?|\.\d+)"
 _HEADER = re.compile(rf"^##\s*{_NUMBER}\s*-\s*{_NUMBER}$")
 _ACTION = re.compile(r"^\[\s*([A-Za-z_]+)\s*\]\s*(.*)$")
+_BARE_ACTION = re.compile(r"^([A-Za-z_]+)\s+(<.*)$")  # `Switchoff <light_bedroom>`: the brackets left out
 _ARGUMENT = re.compile(r"\s*<([^<>]*)>(?:\s*\((\d+)\))?")
 
 
@@ -143,7 +145,7 @@ def _split_arguments(rest: str) -> list[tuple[str, int | None]] | None:
 
 def parse_action(text: str, line: int, resolve: Callable[[str], str], errors: list) -> Action | None:
     """One action line -> Action, or None after appending (line, reason) to `errors`."""
-    match = _ACTION.match(text)
+    match = _ACTION.match(text) or _BARE_ACTION.match(text)
     names = _split_arguments(match.group(2)) if match else None
     if match is None or names is None:
         errors.append((line, f"cannot read {text!r}; expected '[Verb] <name>' or '[Verb] <name> <name>'"))
