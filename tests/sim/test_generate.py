@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -118,6 +119,57 @@ def test_compat_check_runs_most_homer_scripts() -> None:
     result = compat_check(REFERENCE / "sourcedScriptsByActivity")
     assert result["scripts"] == len(list((REFERENCE / "sourcedScriptsByActivity").glob("*/*.txt")))
     assert result["executed"] >= 0.9 * result["scripts"], result["failures"]
+
+
+DAY = """wake_up (06:00 - 06:10)
+breakfast (08:05 - 08:{end})
+
+### wake_up-00.txt
+
+[WALK] <bedroom> (162) [1]
+370.0
+## Wakeup until 06:10
+
+### breakfast-00a.txt
+
+[WALK] <kitchen_counter> (119) [1]
+485.0
+[GRAB] <{what}> (1026) [2]
+486.0
+<<Graph Changes>>
+   - bowl INSIDE cupboard
+## Breakfast until 08:48
+"""
+
+
+def test_homer_plus_blocks_become_activity_scripts_once_each(tmp_path: Path) -> None:
+    from homer_sim.person.compat import homer_plus_scripts
+
+    days = (("scripts_train", "000", "48"), ("scripts_train", "001", "15"), ("scripts_test", "000", "30"))
+    for split, day, end in days:
+        (tmp_path / split).mkdir(exist_ok=True)
+        (tmp_path / split / f"{day}.txt").write_text(DAY.format(end=end, what="bowl"))
+    scripts = dict(homer_plus_scripts(tmp_path))
+    assert sorted(scripts) == ["breakfast/00a.txt", "wake_up/00.txt"]
+    assert scripts["breakfast/00a.txt"] == "## 10-43\n[WALK] <kitchen_counter> (119)\n[GRAB] <bowl> (1026)\n"
+    assert scripts["wake_up/00.txt"] == "## 10-10\n[WALK] <bedroom> (162)\n"
+    (tmp_path / "scripts_test" / "001.txt").write_text(DAY.format(end="30", what="plate"))
+    with pytest.raises(HomerError, match="001.txt: block breakfast-00a.txt differs from its first occurrence"):
+        homer_plus_scripts(tmp_path)
+    with pytest.raises(HomerError, match="no HOMER\\+ day scripts"):
+        homer_plus_scripts(tmp_path / "scripts_test" / "nowhere")
+
+
+CACHE = Path(os.environ.get("HOMER_SIM_CACHE", Path.home() / ".cache" / "homer-sim"))
+HOUSEHOLD_A = CACHE / "homer_plus" / "HouseholdA"
+
+
+@pytest.mark.skipif(not (HOUSEHOLD_A / "scripts_train").is_dir(), reason="HOMER+ household A is not unpacked")
+def test_compat_check_runs_most_activity_scripts_of_homer_plus() -> None:
+    from homer_sim.person.compat import compat_check_texts, homer_plus_scripts
+
+    result = compat_check_texts(homer_plus_scripts(HOUSEHOLD_A))
+    assert result["scripts"] >= 30 and result["executed"] >= 0.9 * result["scripts"], result["failures"]
 
 
 @pytest.mark.skipif(not REFERENCE.is_dir(), reason="the HOMER reference folder is not beside the checkout")

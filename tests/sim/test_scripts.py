@@ -59,6 +59,15 @@ def test_accepts_whitespace_case_comments_and_annotations() -> None:
         ("standup", (), 10), ("sit", ("table_dining_room",), 11)]
 
 
+def test_a_verb_line_without_brackets_is_read_when_arguments_follow() -> None:
+    script = parse("## 1-2\n[Walk] <fridge>\nSwitchoff <fridge>\nPour <milk> <bowl>\n")
+    assert [(a.verb, a.args, a.line) for a in script.actions] == [
+        ("walk", ("fridge",), 2), ("switchoff", ("fridge",), 3), ("pour", ("milk", "bowl"), 4)]
+    error = errors_of("## 1-2\nSwitchof <fridge>\nSwitchoff\n")
+    assert [line for line, _ in error.errors] == [2, 3]
+    assert "unknown verb 'switchof'" in error.errors[0][1] and "cannot read 'Switchoff'" in error.errors[1][1]
+
+
 def test_every_error_of_a_file_is_reported_at_once_with_line_numbers() -> None:
     text = (
         "[Walk] <cupboard>\n"          # 1: before any header
@@ -148,14 +157,37 @@ def test_instances_pick_the_piece_the_id_names_and_an_instance_without_counterpa
     assert resolver("faucet", 20) == "sink_bathroom" and resolver("faucet") == "sink_dining_room"
     assert resolver("table", 1) == "table_dining_room"  # an id the table lacks: by the name
     assert resolver("water_glass") == "drinking_glass" and resolver.knows("chair")
-    assert not resolver.knows("chair", 194)
-    with pytest.raises(KeyError, match="instance 194 of the HOMER\\+ apartment has no counterpart"):
-        resolver("chair", 194)
+    assert resolver("chair", 194) == "chair_bedroom" and resolver("chair", 271) == resolver("chair")
     script = parse_script("## 1-2\n[Walk] <kitchen_counter> (119)\n[Sit] <sofa> (198)\n[Sit] <sofa>\n", "test.txt",
                           "reading", "0", resolver)
     assert [a.args for a in script.actions] == [("kitchen_counter_right",), ("sofa_bedroom",), ("sofa_home_office",)]
+    lacking = Resolver(resolver.nodes, instances={**INSTANCES, "chair (194)": None})
+    assert not lacking.knows("chair", 194) and lacking.knows("chair")
+    with pytest.raises(KeyError, match="instance 194 of the HOMER\\+ apartment has no counterpart"):
+        lacking("chair", 194)
     with pytest.raises(ScriptError, match="test.txt:2: unknown name 'chair'"):
-        parse_script("## 1-2\n[Sit] <chair> (194)\n", "test.txt", "reading", "0", resolver)
+        parse_script("## 1-2\n[Sit] <chair> (194)\n", "test.txt", "reading", "0", lacking)
+
+
+# Every object, furniture and appliance name HOMER's activity scripts use beyond HOMER's graph, as issue 22 lists
+# them from a compatibility run on scripts the project had not seen.
+HOMER_VOCABULARY = (
+    "ground_coffee coffee_filter food_egg sauce_pan chef_knife toothbrush_holder paper_towel groceries pencil note_pad "
+    "shredder mouthwash phone napkin radio food_chicken oven instrument_violin bookmark water_glass dishtowel dishrack "
+    "food_peanut_butter clothes_gloves clothes_hat clothes_scarf clothes_skirt clothes_underwear pajamas drying_rack "
+    "face_soap comb curtain_bedroom chair_bedroom door_dining_room").split()
+
+
+def test_homer_script_vocabulary_resolves_and_what_is_handled_is_a_body() -> None:
+    resolver, layout = default_resolver(), default_layout()
+    objects = {o.name for o in layout.objects}
+    nodes = objects | {f.name for f in layout.furniture}
+    for name in HOMER_VOCABULARY:
+        target = resolver(name)
+        assert target in nodes or name in SCENERY, name
+    handled = "food_egg sauce_pan chef_knife paper_towel pencil note_pad mouthwash instrument_violin bookmark " \
+              "clothes_gloves clothes_hat clothes_scarf clothes_skirt clothes_underwear pajamas face_soap comb dishrack"
+    assert set(handled.split()) <= objects
 
 
 homer = pytest.mark.skipif(not HOMER_SCRIPTS.is_dir(), reason="the HOMER reference scripts are not here")
