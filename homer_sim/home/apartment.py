@@ -97,7 +97,7 @@ FURNITURE = (
        "appliance", top_place=True, rgba=WHITE, plinth=0.15),
     # What HOMER's activity scripts name beyond its graph, placed where nothing stood.
     _f("chair_bedroom", "chair", "chair", "bedroom", (4.75, 5.7), "E", (0.5, 0.5, 0.9)),
-    _f("drying_rack", "drying_rack", "shelf", "bedroom", (6.9, 4.725), "N", (1.0, 0.4, 1.0), shelves=(0.5,)),
+    _f("drying_rack", "drying_rack", "shelf", "bedroom", (6.9, 4.725), "N", (1.2, 0.4, 1.0), shelves=(0.5,)),
     _f("shredder", "shredder", "block", "home_office", (7.55, 0.2), "N", (0.4, 0.3, 0.6), "appliance",
        no_place=True, rgba=(0.2, 0.2, 0.22, 1.0)),
     _f("oven", "oven", "cabinet", "dining_room", (3.8, 4.185), "S", (0.6, 0.6, 0.85), "appliance",
@@ -168,15 +168,16 @@ OBJECTS = (
     # Objects HOMER's activity scripts name beyond its graph and HOMER+.
     *_objects("fridge", INSIDE, "food_egg", level=2),
     *_objects("stove", ON, "sauce_pan"),
+    *_objects("kitchen_counter_right", ON, "chef_knife"),
+    *_objects("kitchen_cabinet", ON, "paper_towel", level=2),
     *_objects("oven", ON, "dishrack"),  # the counters are full: the one free top at counter height
-    *_objects("kitchen_counter_left", ON, "chef_knife"),
-    *_objects("cupboard", INSIDE, "paper_towel", level=2),
     *_objects("filing_cabinet", INSIDE, "note_pad pencil", level=0),
-    *_objects("bathroom_cabinet", INSIDE, "mouthwash face_soap comb", level=2),
-    *_objects("dresser", INSIDE, "clothes_underwear clothes_gloves", level=0),
-    *_objects("bed", ON, "pajamas"),
-    *_objects("drying_rack", ON, "clothes_skirt", level=0),
-    *_objects("dresser", INSIDE, "clothes_hat clothes_scarf", level=2),
+    *_objects("shower", INSIDE, "face_soap", level=1),
+    *_objects("dresser", ON, "comb", level=3),
+    *_objects("bathroom_cabinet", INSIDE, "mouthwash", level=2),
+    *_objects("dresser", INSIDE, "clothes_underwear", level=0),
+    *_objects("sofa_bedroom", ON, "pajamas"),
+    *_objects("drying_rack", ON, "clothes_skirt clothes_scarf clothes_gloves clothes_hat", level=1),
     *_objects("table_home_office", ON, "instrument_violin"),
     *_objects("bookshelf_bedroom", ON, "bookmark", level=2),
 )

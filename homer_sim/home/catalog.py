@@ -138,7 +138,7 @@ _ROWS: tuple[tuple, ...] = (
     ("washcloth", "cloth", (0.15, 0.10, 0.02), 0.05, _WHITE),
     ("groceries", "box", (0.36, 0.20, 0.30), 2.0, _PAPER),
     # classes HOMER's activity scripts name beyond its graph and HOMER+
-    ("food_egg", "box", (0.24, 0.10, 0.07), 0.5, _PAPER),  # a carton of six
+    ("food_egg", "box", (0.15, 0.09, 0.07), 0.3, _PAPER),  # a carton of six
     ("sauce_pan", "pot", (0.26, 0.16, 0.10), 0.9, _STEEL),
     ("chef_knife", "utensil", (0.30, 0.045, 0.02), 0.2, _STEEL),
     ("paper_towel", "cylinder", (0.12, 0.12, 0.28), 0.3, _WHITE),
@@ -183,7 +183,7 @@ _ROWS: tuple[tuple, ...] = (
     ("clothes_gloves", "cloth", (0.22, 0.12, 0.03), 0.1, _DARK),
     ("clothes_hat", "cloth", (0.20, 0.14, 0.06), 0.1, _RED),  # a folded knit hat
     ("clothes_scarf", "cloth", (0.30, 0.12, 0.04), 0.2, _BLUE),
-    ("clothes_skirt", "cloth", (0.30, 0.22, 0.04), 0.3, _PINK),
+    ("clothes_skirt", "cloth", (0.28, 0.14, 0.04), 0.3, _PINK),
     ("clothes_underwear", "cloth", (0.14, 0.10, 0.03), 0.05, _WHITE),
     ("pajamas", "cloth", (0.32, 0.24, 0.05), 0.4, _CLOTH),
     # office and living
@@ -235,7 +235,6 @@ _HANDLES: dict[str, tuple[float, float, float]] = {
     "clothes_pants": (0.26, 0.03, 0.025),
     "clothes_dress": (0.26, 0.03, 0.02),
     "clothes_jacket": (0.30, 0.04, 0.035),
-    "clothes_skirt": (0.22, 0.03, 0.02),
     "pajamas": (0.24, 0.03, 0.02),
     "instrument_violin": (0.14, 0.025, 0.04),  # the case's handle
     "blanket": (0.40, 0.04, 0.04),
