@@ -90,7 +90,7 @@ def test_day_script_reads_header_minutes_and_edge_changes() -> None:
 
 @pytest.mark.parametrize(("line", "expected"), [
     ("[JUMP] <bowl> (1) [1]", "000.txt:7: unknown verb 'jump'"),
-    ("[GRAB] <shredder> (1) [1]", "000.txt:7: unknown name 'shredder'"),
+    ("[GRAB] <toaster> (1) [1]", "000.txt:7: unknown name 'toaster'"),
 ])
 def test_unknown_verb_or_object_names_file_and_line(line: str, expected: str) -> None:
     text = DAY.replace("[WALK] <dining_room> (11) [1]", line)
@@ -209,9 +209,9 @@ def test_replay_check_counts_agreement_changes_and_causes(tmp_path: Path) -> Non
 
 @pytest.mark.physics
 def test_replay_check_leaves_out_and_counts_actions_on_things_we_lack(tmp_path: Path) -> None:
-    # The bowl is put on a shredder we lack: that put-down and the bowl's grab are left out, the bowl stays in
+    # The bowl is put on a toaster we lack: that put-down and the bowl's grab are left out, the bowl stays in
     # the cupboard and the day goes on. Their bowl is on the table 08:10-09:50 (11 steps); ours never moved.
-    day = DAY.replace("<bowl> (1001) <table> (231)", "<bowl> (1001) <shredder> (1117)")
+    day = DAY.replace("<bowl> (1001) <table> (231)", "<bowl> (1001) <toaster> (1117)")
     result = replay_check(_household(tmp_path / "HouseholdT", 600, day))
     # Both left-out actions' change lines are checked after the find before them: '- bowl INSIDE cupboard' and
     # '+ bowl ON table' are not seen there, '+ bowl INSIDE dining_room' is (the cupboard is in it), and so is
@@ -219,11 +219,11 @@ def test_replay_check_leaves_out_and_counts_actions_on_things_we_lack(tmp_path: 
     assert result == {"days": 1, "days_completed": 1, "agreement": round(98 / 109, 4),
                       "graph_changes_seen": round(2 / 4, 4), "agreement_known": round(98 / 109, 4),
                       "graph_changes_seen_known": round(2 / 4, 4),
-                      "causes": {"start placement differs": 11, "action left out, missing scenery: shredder": 1,
+                      "causes": {"start placement differs": 11, "action left out, missing scenery: toaster": 1,
                                  "action left out, its put-down was": 1,
                                  "change not seen (-), its action left out": 1,
                                  "change not seen (+), its action left out": 1}, "failed": {}}
-    with pytest.raises(ScriptError, match="000.txt:19: unknown name 'shredder'"):  # homer replay refuses it
+    with pytest.raises(ScriptError, match="000.txt:19: unknown name 'toaster'"):  # homer replay refuses it
         Replayer().read(tmp_path / "HouseholdT" / "scripts_train" / "000.txt")
 
 
