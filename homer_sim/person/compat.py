@@ -23,6 +23,7 @@ from homer_sim.errors import HomerError
 from homer_sim.person.activities import script_files
 from homer_sim.person.aliases import Resolver
 from homer_sim.person.avatar import add_avatar
+from homer_sim.person.day_scripts import _NUMBER_TAG, _entry
 from homer_sim.person.executor import ActionError, Executor
 from homer_sim.person.scripts import Script, ScriptError, parse_script
 from homer_sim.world import World
@@ -101,8 +102,6 @@ def compat_check_texts(sources: Iterable[tuple[str, str]], progress: bool = Fals
 
 
 _BLOCK = re.compile(r"^###\s*(\S+?)-([^-\s]+)\.txt$")
-_ENTRY = re.compile(r"^([A-Za-z_]+)\s*\(\s*(\d+):(\d+)\s*-\s*(1day\s*-\s*)?(\d+):(\d+)\s*\)$")
-_NUMBER_TAG = re.compile(r"\s*\[\d+\]$")
 
 
 def _day_blocks(path: Path) -> list[tuple[str, str, float, list[str]]]:
@@ -111,15 +110,14 @@ def _day_blocks(path: Path) -> list[tuple[str, str, float, list[str]]]:
     durations, blocks = [], []
     for raw in path.read_text(encoding="utf-8-sig").splitlines():
         text = raw.strip()
-        entry = _ENTRY.match(text)
+        entry = _entry(text)
         block = _BLOCK.match(text)
         if entry is not None and not blocks:
-            h1, m1, next_day, h2, m2 = entry.groups()[1:]
-            durations.append(int(h2) * 60 + int(m2) + (1440 if next_day else 0) - int(h1) * 60 - int(m1))
+            durations.append(entry[2] - entry[1])
         elif block is not None:
             if len(blocks) >= len(durations):
                 raise HomerError(f"{path}: block {text!r} has no entry in the day's header")
-            blocks.append((block.group(1), block.group(2), float(durations[len(blocks)]), []))
+            blocks.append((block.group(1), block.group(2), durations[len(blocks)], []))
         elif text.startswith("[") and blocks:
             blocks[-1][3].append(_NUMBER_TAG.sub("", text))
     return blocks
