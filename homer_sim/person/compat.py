@@ -127,8 +127,8 @@ def homer_plus_scripts(household: str | Path) -> list[tuple[str, str]]:
     """Each distinct `### <activity>-<variant>.txt` block of the HOMER+ day scripts under `household` (its
     `scripts_train/` and `scripts_test/`, or a folder of NNN.txt) as an activity script: (`<activity>/<variant>.txt`,
     text). The actions are the block's, in order, with their VirtualHome ids; one `## <min>-<max>` block spans the
-    shortest to the longest time the days' headers give the activity. A variant whose actions differ between days
-    is an error."""
+    shortest to the longest time the days' headers give the activity, so a failure's line n is the block's action
+    n - 1. A variant whose actions differ between days is an error."""
     root = Path(household)
     folders = [root / split for split in ("scripts_train", "scripts_test") if (root / split).is_dir()] or [root]
     files = sorted(p for folder in folders for p in folder.glob("*.txt"))

@@ -172,7 +172,8 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     source.add_argument("--scripts", type=Path, help="folder laid out <activity>/<name>.txt")
     source.add_argument("--from-homer-plus", type=Path, metavar="HOUSEHOLD",
                         help="the activity scripts embedded in a HOMER+ household's day scripts (each distinct "
-                        "'### <activity>-<variant>.txt' block once; a HouseholdX folder or a folder of NNN.txt)")
+                        "'### <activity>-<variant>.txt' block once, as '## <min>-<max>' and its actions, so line n is "
+                        "the block's action n - 1; a HouseholdX folder or a folder of NNN.txt)")
     compat.add_argument("--json", action="store_true", help="print one JSON object")
     compat.set_defaults(func=cmd_compat_check)
 
