@@ -100,7 +100,7 @@ FURNITURE = (
     _f("drying_rack", "drying_rack", "shelf", "bedroom", (6.9, 4.725), "N", (1.2, 0.4, 1.0), shelves=(0.5,)),
     _f("shredder", "shredder", "block", "home_office", (7.55, 0.2), "N", (0.4, 0.3, 0.6), "appliance",
        no_place=True, rgba=(0.2, 0.2, 0.22, 1.0)),
-    _f("oven", "oven", "cabinet", "dining_room", (3.8, 4.185), "S", (0.6, 0.6, 0.85), "appliance",
+    _f("oven", "oven", "cabinet", "dining_room", (3.8, 4.16), "S", (0.75, 0.65, 0.85), "appliance",
        shelves=(0.4,), hinge="left", rgba=STEEL, door_mass=4.0, plinth=0.08, top_place=True),
 )
 
@@ -168,9 +168,8 @@ OBJECTS = (
     # Objects HOMER's activity scripts name beyond its graph and HOMER+.
     *_objects("fridge", INSIDE, "food_egg", level=2),
     *_objects("stove", ON, "sauce_pan"),
-    *_objects("kitchen_counter_right", ON, "chef_knife"),
     *_objects("kitchen_cabinet", ON, "paper_towel", level=2),
-    *_objects("oven", ON, "dishrack"),  # the counters are full: the one free top at counter height
+    *_objects("oven", ON, "chef_knife dishrack"),  # the counters are full: the one free top at counter height
     *_objects("filing_cabinet", INSIDE, "note_pad pencil", level=0),
     *_objects("shower", INSIDE, "face_soap", level=1),
     *_objects("dresser", ON, "comb", level=3),

@@ -142,7 +142,7 @@ _ROWS: tuple[tuple, ...] = (
     ("sauce_pan", "pot", (0.26, 0.16, 0.10), 0.9, _STEEL),
     ("chef_knife", "utensil", (0.30, 0.045, 0.02), 0.2, _STEEL),
     ("paper_towel", "cylinder", (0.12, 0.12, 0.28), 0.3, _WHITE),
-    ("dishrack", "bin", (0.40, 0.32, 0.10), 1.0, _STEEL, "prop", True),
+    ("dishrack", "bin", (0.36, 0.27, 0.10), 1.0, _STEEL, "prop", True),
     # bathroom
     ("toothbrush", "utensil", (0.19, 0.02, 0.02), 0.02, _BLUE),
     ("tooth_paste", "box", (0.19, 0.045, 0.035), 0.12, _WHITE),
