@@ -4,8 +4,10 @@ For an unpacked upstream `HouseholdX` folder (`scripts_train/NNN.txt` and `scrip
 `processed_seqLM_coarse/train/NNN.pt` and `test/NNN.pt`), each day script is replayed physically
 (`homer_sim.data.replay`) and compared with the authors' graph (read as `homer_sim.data.homer_plus` reads it).
 The day starts from the authors' arrangement at its first step: each object we have starts on our counterpart of
-the authors' parent where it fits (`start_layout`; what stands on a room's floor, in a knife block, or does not
-fit there starts where our apartment declares it, and counts as `start placement differs` until moved).
+the authors' parent where it fits (`start_layout`), on the room's floor where their parent is a room (VirtualHome
+hangs what lies on a floor from the room: `floor` is one of their ignored classes, and their day scripts put the
+guitar back `ON home_office`); their props, what stands in a knife block, or does not fit there start where our
+apartment declares them, and count as `start placement differs` until moved.
 
 - every 10 minutes, each movable object's parent in our observed graph against the authors' parent, both through
   the alias table (`homer_sim.person.aliases`): `agreement` is the share of object-steps that agree,
@@ -102,13 +104,16 @@ class HouseholdCheck:
 
     def replayer_for(self, start: np.ndarray) -> Replayer:
         """A replayer of our apartment with the objects starting where the authors' graph row `start` has them
-        (through the alias table, where they fit; see `start_layout`), one per distinct start."""
+        (through the alias table, where they fit; see `start_layout`), one per distinct start. Their props (the
+        knife block, the trash can: category Props) stand where ours are set up: no script of theirs moves
+        them and their graph gives them only a room, at every step (on the floor for a trash can; what a knife
+        block stands on is not in it)."""
         key = tuple(int(p) for p in start)
         if key not in self._replayers:
             parents = {}
             for i in np.flatnonzero(self.house.movable):
                 obj, parent = self.resolve_index(i), self.resolve_index(int(start[i]))
-                if obj in self.movable and parent is not None:
+                if obj in self.movable and parent is not None and self.house.categories[i] != "prop":
                     parents[obj] = parent
             self._replayers[key] = Replayer(layout=start_layout(self.layout, parents)[0])
         return self._replayers[key]

@@ -56,7 +56,7 @@ class Spots:
         self.sizes = np.array([CATALOG[o.cls].size for o in self.layout.objects])
         self._standing: dict[str, tuple[float, float, float]] = {}
         self._geomid = np.zeros(1, dtype=np.int32)
-        self.keep_out = _keep_out_rects(self.layout)
+        self.keep_out = keep_out_rects(self.layout)
 
     # --- standing ---------------------------------------------------------------------------------------
     def standing_for(self, node: str) -> tuple[float, float, float]:
@@ -202,7 +202,7 @@ class Spots:
         raise PlacementError(f"no free floor for {name} in {room} near {np.round(near, 2).tolist()}")
 
 
-def _keep_out_rects(layout) -> list[tuple[float, float, float, float]]:
+def keep_out_rects(layout) -> list[tuple[float, float, float, float]]:
     """World rectangles in front of doors and drawers (their swing and a person's room to use them), where
     nothing may be left on the floor."""
 
@@ -237,4 +237,4 @@ def _footprint_rect(f) -> tuple[float, float, float, float]:
     return footprint(f)
 
 
-__all__ = ["Spots", "Spot", "PlacementError", "PERSON_RADIUS", "base_height"]
+__all__ = ["Spots", "Spot", "PlacementError", "PERSON_RADIUS", "base_height", "keep_out_rects"]
