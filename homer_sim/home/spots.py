@@ -171,6 +171,9 @@ class Spots:
         z = world_place["z"]
         boxes = self.footprints(exclude)
         near = boxes[(boxes[:, 4] > z - 0.05) & (boxes[:, 4] < z + place.clearance)]
+        standing = [(*footprint(o), z) for o in self.layout.furniture if o.on == node]
+        if standing and place.center[2] >= f.size[2] - 1e-6:  # its top: an appliance standing there is in the way
+            near = np.vstack([near, standing])
         candidates = [(rng.uniform(x0 + half_x, x1 - half_x), rng.uniform(y0 + half_y, y1 - half_y))
                       for _ in range(PLACE_TRIES)]
         candidates += [(x, y) for x in np.arange(x0 + half_x, x1 - half_x + 1e-9, 0.02)
