@@ -83,6 +83,7 @@ FURNITURE = (
     _f("bookshelf_bedroom", "bookshelf", "shelf", "bedroom", (7.2, 7.775), "S", (0.8, 0.35, 1.2),
        shelves=(0.42, 0.82)),
     _f("sofa_bedroom", "sofa", "sofa", "bedroom", (3.975, 7.0), "E", (1.6, 0.85, 0.85)),
+    _f("chair_bedroom", "chair", "chair", "bedroom", (6.6, 4.83), "N", (0.5, 0.5, 0.9)),
     # Bathroom.
     _f("shower", "shower", "shower", "bathroom", (0.525, 7.45), "E", (1.0, 0.95, 2.0)),
     _f("toilet", "toilet", "block", "bathroom", (0.375, 5.5), "E", (0.4, 0.65, 0.75), no_place=True, rgba=WHITE),

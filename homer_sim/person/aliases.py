@@ -11,8 +11,8 @@ Lookup order, names matched in lower case with surrounding spaces ignored:
    those; 119 (the sink's, where their scripts put most things) is our right one. Going by what the counters
    stand beside instead (our left one is beside our sink, the right one beside our stove) puts 119 and 122 on
    our left counter, which is then too full for what the authors set down there (replay-check on household A:
-   92.1% agreement over what we have, against 92.8%). null marks an instance we have no counterpart for yet
-   (their bedroom chair, 194): it is unknown even though its class name alone would resolve.
+   92.1% agreement over what we have, against 92.8%). null marks an instance we have no counterpart for (none
+   at present): it is unknown even though its class name alone would resolve.
 2. the exact node name;
 3. `aliases` (name -> node): HOMER/VirtualHome names of things we have under another name, mostly class names
    without our instance suffix (`table` -> `table_dining_room`) and other spellings of one thing

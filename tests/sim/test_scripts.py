@@ -148,6 +148,8 @@ def test_instances_pick_the_piece_the_id_names_and_an_instance_without_counterpa
     assert resolver("faucet", 20) == "sink_bathroom" and resolver("faucet") == "sink_dining_room"
     assert resolver("table", 1) == "table_dining_room"  # an id the table lacks: by the name
     assert resolver("water_glass") == "drinking_glass" and resolver.knows("chair")
+    assert resolver("chair", 194) == "chair_bedroom" and resolver("chair", 271) == resolver("chair")
+    resolver = Resolver(resolver.nodes, instances={**INSTANCES, "chair (194)": None})  # as if we lacked it
     assert not resolver.knows("chair", 194)
     with pytest.raises(KeyError, match="instance 194 of the HOMER\\+ apartment has no counterpart"):
         resolver("chair", 194)
