@@ -13,7 +13,8 @@ apartment declares them, and count as `start placement differs` until moved.
   the alias table (`homer_sim.person.aliases`): `agreement` is the share of object-steps that agree,
   `agreement_known` the share among the object-steps whose object and parent we have;
 - after each action, each `<<Graph Changes>>` edge line against our observer: `+ obj REL parent` is seen when
-  our object now rests on the parent, `- obj REL parent` when it no longer does (or is in the person's hands).
+  our object now rests on the parent, `- obj REL parent` when it no longer does (or is in the person's hands); an
+  INSIDE line on a room by the room our object is in, an ON line on a room by whether it rests on that floor.
 
 Names go through the alias table with the authors' VirtualHome ids, so their three kitchen counters map to
 our counters as `aliases.json` says. Unlike `homer replay`, which refuses a day naming something we lack, the check
@@ -228,9 +229,11 @@ class HouseholdCheck:
               moved_within: bool) -> tuple[bool, str]:
         """Whether our graph shows `change`. `ids` are the VirtualHome ids the action wrote (which counter): a
         class of several pieces without one there may be any of them; `moved_within`: a `-` line whose object
-        the block also adds to that class, so it left another piece than the one the action names. A line on a
-        room (VirtualHome keeps every object INSIDE its room as well) is judged by the room our object is in:
-        the person's while it is carried."""
+        the block also adds to that class, so it left another piece than the one the action names. An INSIDE line
+        on a room (VirtualHome keeps every object INSIDE its room as well) is judged by the room our object is in:
+        the person's while it is carried; an ON line on a room is its floor (their guitar is `+ ON home_office`
+        when put down there, `- ON home_office` when put on the office chair, in the same room), judged as
+        furniture is: whether our object rests on that room's floor."""
         names = (change.obj, change.parent)
         nodes = [self.candidates(name, ids.get(name)) for name in names]
         if moved_within and ids.get(change.parent) is not None:
@@ -240,7 +243,7 @@ class HouseholdCheck:
                 return False, self.missing(self.label(name, ids.get(name)))
         objs, parents = nodes
         obj = min(objs)
-        if parents <= self.rooms:
+        if parents <= self.rooms and change.relation == "INSIDE":
             now = person_room if obj in carried else self.room_of(graph, obj)
             ok = (now in parents) == (change.sign == "+")
         else:
