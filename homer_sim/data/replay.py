@@ -11,6 +11,7 @@ lacks, an action that fails) is logged with its reason in `generation.log` and t
 from __future__ import annotations
 
 import json
+import math
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
@@ -28,9 +29,11 @@ from homer_sim.errors import HomerError, LayoutError
 from homer_sim.execution import IN_PROCESS, Backend
 from homer_sim.graph import INSIDE, ON
 from homer_sim.home.catalog import CATALOG
+from homer_sim.home.floorplan import floor_plan
 from homer_sim.home.furniture import furniture_geometry
-from homer_sim.home.layout import Layout, ObjectDecl
+from homer_sim.home.layout import Layout, ObjectDecl, Room
 from homer_sim.home.placement import start_poses
+from homer_sim.home.spots import keep_out_rects
 from homer_sim.person.aliases import Resolver
 from homer_sim.person.avatar import add_avatar
 from homer_sim.person.day_scripts import DayScript, read_day_script
@@ -39,6 +42,8 @@ from homer_sim.person.scripts import ScriptError
 from homer_sim.world import World
 
 SPLIT_FOLDERS = {f"scripts_{split}": split for split in SPLITS}
+FLOOR_STEP = 0.05  # m between the floor points tried for an object that starts on a room's floor
+FLOOR_GAP = 0.05  # m an object that starts on a floor keeps from walls, furniture and other things there
 
 
 @dataclass(frozen=True)
@@ -88,12 +93,14 @@ def short_reason(error: HomerError) -> str:
 
 
 def start_layout(layout: Layout, parents: Mapping[str, str]) -> tuple[Layout, tuple[str, ...]]:
-    """`layout` with its objects starting on the parents given (object -> furniture or object: INSIDE furniture
-    that has places inside, else ON; ON an object that holds others), each where it fits beside the others
-    (packed as `start_poses` packs the declared layout); the objects keep their order. Returns the layout and
-    the objects left at their declared start: on a room's floor (no spot given), an unknown parent, an object
-    that holds nothing or stands on this one, or no room left there."""
+    """`layout` with its objects starting on the parents given (object -> furniture, object or room: INSIDE
+    furniture that has places inside, else ON; ON an object that holds others; on a room's floor), each where it
+    fits beside the others (packed as `start_poses` packs the declared layout; on a floor at the free spot
+    nearest the room's centre, see `_floor_spot`); the objects keep their order. Returns the layout and the
+    objects left at their declared start: an unknown parent, an object that holds nothing or stands on this one,
+    or no room left there."""
     furniture = layout.furniture_by_name()
+    rooms = {r.name: r for r in layout.rooms}
     objects = {o.name: o for o in layout.objects}  # their order is kept: it is the scene graph's node order
     left: list[str] = []
     for name, parent in parents.items():
@@ -105,6 +112,8 @@ def start_layout(layout: Layout, parents: Mapping[str, str]) -> tuple[Layout, tu
             moved = replace(decl, parent=parent, relation=INSIDE if INSIDE in relations else ON, level=None, at=None)
         elif parent in objects and CATALOG[objects[parent].cls].supports and name not in _below(objects, parent):
             moved = replace(decl, parent=parent, relation=ON, level=None, at=None)
+        elif parent in rooms and (at := _floor_spot(layout, decl, rooms[parent], objects)) is not None:
+            moved = replace(decl, parent=parent, relation=INSIDE, level=None, at=at)
         else:
             left.append(name)
             continue
@@ -117,6 +126,27 @@ def start_layout(layout: Layout, parents: Mapping[str, str]) -> tuple[Layout, tu
             continue
         objects, layout = trial, candidate
     return layout, tuple(left)
+
+
+def _floor_spot(layout: Layout, decl: ObjectDecl, room: Room, objects: Mapping[str, ObjectDecl]
+                ) -> tuple[float, float] | None:
+    """Where `decl` starts on the floor of `room`: the free point nearest the room's centre (on a 5 cm grid) whose
+    disk (the object's footprint turned any way) keeps clear of walls, furniture, the swing of doors and drawers,
+    and of what already stands on that floor; None if there is none."""
+    plan, keep_out = floor_plan(layout), keep_out_rects(layout)
+    radius = math.hypot(*CATALOG[decl.cls].size[:2]) / 2 + FLOOR_GAP
+    others = [(o.at, math.hypot(*CATALOG[o.cls].size[:2]) / 2) for o in objects.values()
+              if o.parent == room.name and o.at is not None and o.name != decl.name]
+    x0, y0, x1, y1 = room.rect
+    xs, ys = np.meshgrid(np.arange(x0 + radius, x1 - radius, FLOOR_STEP), np.arange(y0 + radius, y1 - radius,
+                                                                                     FLOOR_STEP))
+    points = np.column_stack([xs.ravel(), ys.ravel()])
+    centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2])
+    for x, y in points[np.argsort(np.linalg.norm(points - centre, axis=1), kind="stable")]:
+        if all(math.dist((x, y), at) >= radius + r for at, r in others) and plan.disk_is_free(x, y, radius,
+                                                                                               keep_out):
+            return round(float(x), 3), round(float(y), 3)
+    return None
 
 
 def _below(objects: Mapping[str, ObjectDecl], name: str) -> list[str]:

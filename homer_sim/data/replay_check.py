@@ -4,14 +4,17 @@ For an unpacked upstream `HouseholdX` folder (`scripts_train/NNN.txt` and `scrip
 `processed_seqLM_coarse/train/NNN.pt` and `test/NNN.pt`), each day script is replayed physically
 (`homer_sim.data.replay`) and compared with the authors' graph (read as `homer_sim.data.homer_plus` reads it).
 The day starts from the authors' arrangement at its first step: each object we have starts on our counterpart of
-the authors' parent where it fits (`start_layout`; what stands on a room's floor, in a knife block, or does not
-fit there starts where our apartment declares it, and counts as `start placement differs` until moved).
+the authors' parent where it fits (`start_layout`), on the room's floor where their parent is a room (VirtualHome
+hangs what lies on a floor from the room: `floor` is one of their ignored classes, and their day scripts put the
+guitar back `ON home_office`); their props, what stands in a knife block, or does not fit there start where our
+apartment declares them, and count as `start placement differs` until moved.
 
 - every 10 minutes, each movable object's parent in our observed graph against the authors' parent, both through
   the alias table (`homer_sim.person.aliases`): `agreement` is the share of object-steps that agree,
   `agreement_known` the share among the object-steps whose object and parent we have;
 - after each action, each `<<Graph Changes>>` edge line against our observer: `+ obj REL parent` is seen when
-  our object now rests on the parent, `- obj REL parent` when it no longer does (or is in the person's hands).
+  our object now rests on the parent, `- obj REL parent` when it no longer does (or is in the person's hands); an
+  INSIDE line on a room by the room our object is in, an ON line on a room by whether it rests on that floor.
 
 Names go through the alias table with the authors' VirtualHome ids, so their three kitchen counters map to
 our counters as `aliases.json` says. Unlike `homer replay`, which refuses a day naming something we lack, the check
@@ -102,13 +105,16 @@ class HouseholdCheck:
 
     def replayer_for(self, start: np.ndarray) -> Replayer:
         """A replayer of our apartment with the objects starting where the authors' graph row `start` has them
-        (through the alias table, where they fit; see `start_layout`), one per distinct start."""
+        (through the alias table, where they fit; see `start_layout`), one per distinct start. Their props (the
+        knife block, the trash can: category Props) stand where ours are set up: no script of theirs moves
+        them and their graph gives them only a room, at every step (on the floor for a trash can; what a knife
+        block stands on is not in it)."""
         key = tuple(int(p) for p in start)
         if key not in self._replayers:
             parents = {}
             for i in np.flatnonzero(self.house.movable):
                 obj, parent = self.resolve_index(i), self.resolve_index(int(start[i]))
-                if obj in self.movable and parent is not None:
+                if obj in self.movable and parent is not None and self.house.categories[i] != "prop":
                     parents[obj] = parent
             self._replayers[key] = Replayer(layout=start_layout(self.layout, parents)[0])
         return self._replayers[key]
@@ -223,9 +229,11 @@ class HouseholdCheck:
               moved_within: bool) -> tuple[bool, str]:
         """Whether our graph shows `change`. `ids` are the VirtualHome ids the action wrote (which counter): a
         class of several pieces without one there may be any of them; `moved_within`: a `-` line whose object
-        the block also adds to that class, so it left another piece than the one the action names. A line on a
-        room (VirtualHome keeps every object INSIDE its room as well) is judged by the room our object is in:
-        the person's while it is carried."""
+        the block also adds to that class, so it left another piece than the one the action names. An INSIDE line
+        on a room (VirtualHome keeps every object INSIDE its room as well) is judged by the room our object is in:
+        the person's while it is carried; an ON line on a room is its floor (their guitar is `+ ON home_office`
+        when put down there, `- ON home_office` when put on the office chair, in the same room), judged as
+        furniture is: whether our object rests on that room's floor."""
         names = (change.obj, change.parent)
         nodes = [self.candidates(name, ids.get(name)) for name in names]
         if moved_within and ids.get(change.parent) is not None:
@@ -235,7 +243,7 @@ class HouseholdCheck:
                 return False, self.missing(self.label(name, ids.get(name)))
         objs, parents = nodes
         obj = min(objs)
-        if parents <= self.rooms:
+        if parents <= self.rooms and change.relation == "INSIDE":
             now = person_room if obj in carried else self.room_of(graph, obj)
             ok = (now in parents) == (change.sign == "+")
         else:

@@ -51,6 +51,8 @@ class Place:
     center: middle of the usable area at the surface height (z, m above the furniture base).
     half_xy: half extents of the usable area (x along depth, y along width), m.
     clearance: free height above the surface, m. part: the moving part (drawer) carrying it, or None.
+    open_ends: nothing stands beside the surface at its ends (a chair's seat), so an object longer than the
+    surface is wide may lie across it, its middle on it (a guitar across a chair).
     """
 
     relation: int
@@ -58,6 +60,7 @@ class Place:
     half_xy: tuple[float, float]
     clearance: float
     part: str | None = None
+    open_ends: bool = False
 
 
 @dataclass(frozen=True)
@@ -118,9 +121,10 @@ def block(f: Furniture) -> FurnitureGeometry:
 
 
 def seat(f: Furniture) -> FurnitureGeometry:
-    """A sofa or chair: a seat block with a backrest (and arms for a sofa)."""
+    """A sofa or chair: a seat block with a backrest (a cushion on a sofa, a board on a chair; and arms for a
+    sofa). Things are put on the seat; a chair's has open ends."""
     w, d, h = f.size
-    seat_h, back = f.params.get("seat_height", 0.45), 0.18
+    seat_h, back = f.params.get("seat_height", 0.45), 0.18 if f.kind == "sofa" else 0.06
     arm = 0.15 if f.kind == "sofa" else 0.0
     rgba = tuple(f.params.get("rgba", (0.35, 0.42, 0.55, 1.0)))
     boxes = [
@@ -132,11 +136,11 @@ def seat(f: Furniture) -> FurnitureGeometry:
             _box("arm_l", (-d / 2 + back, -w / 2, seat_h), (d / 2, -w / 2 + arm, seat_h + 0.2), rgba),
             _box("arm_r", (-d / 2 + back, w / 2 - arm, seat_h), (d / 2, w / 2, seat_h + 0.2), rgba),
         ]
-    places = ()
     if f.kind == "sofa":
-        depth = d - back
-        places = (Place(ON, (back / 2, 0.0, seat_h), (depth / 2 - 0.04, w / 2 - arm - 0.04), 0.5),)
-    return FurnitureGeometry(tuple(boxes), places=places)
+        place = Place(ON, (back / 2, 0.0, seat_h), ((d - back) / 2 - 0.04, w / 2 - arm - 0.04), 0.5)
+    else:
+        place = Place(ON, (back / 2, 0.0, seat_h), ((d - back) / 2 - 0.02, w / 2 - 0.02), 0.5, open_ends=True)
+    return FurnitureGeometry(tuple(boxes), places=(place,))
 
 
 def _carcass(d: float, w: float, h: float, plinth: float, rgba) -> list[Box]:

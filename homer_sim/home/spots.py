@@ -56,7 +56,7 @@ class Spots:
         self.sizes = np.array([CATALOG[o.cls].size for o in self.layout.objects])
         self._standing: dict[str, tuple[float, float, float]] = {}
         self._geomid = np.zeros(1, dtype=np.int32)
-        self.keep_out = _keep_out_rects(self.layout)
+        self.keep_out = keep_out_rects(self.layout)
 
     # --- standing ---------------------------------------------------------------------------------------
     def standing_for(self, node: str) -> tuple[float, float, float]:
@@ -155,7 +155,8 @@ class Spots:
                    exclude: set[int]) -> Iterator[Spot]:
         """Every free spot for object `name` on a place of furniture `node` (drawers assumed open): PLACE_TRIES
         random ones, then a scan on a 2 cm grid (so a crowded shelf with one gap left still finds it), then, for
-        cloth, spots on top of what is there."""
+        cloth, spots on top of what is there. On a place with open ends an object longer than the place is wide
+        lies across it, its middle on the place's middle line, where its ends are clear of walls and furniture."""
         f = self.furniture[node]
         place = self._places[node][place_index]
         world_place = place_world(self.layout, f, place, opened=place.part is not None)
@@ -166,23 +167,38 @@ class Spots:
         yaw = stored_yaw(f, place, cls)
         half_x, half_y = _rotated_half(size, yaw)
         x0, y0, x1, y1 = world_place["rect"]
-        if x1 - x0 < 2 * half_x or y1 - y0 < 2 * half_y:
+        across = place.open_ends and size[1] <= 2 * place.half_xy[0] and 2 * place.half_xy[1] < size[0]
+        if not across and (x1 - x0 < 2 * half_x or y1 - y0 < 2 * half_y):
             return
         z = world_place["z"]
         boxes = self.footprints(exclude)
         near = boxes[(boxes[:, 4] > z - 0.05) & (boxes[:, 4] < z + place.clearance)]
-        candidates = [(rng.uniform(x0 + half_x, x1 - half_x), rng.uniform(y0 + half_y, y1 - half_y))
-                      for _ in range(PLACE_TRIES)]
-        candidates += [(x, y) for x in np.arange(x0 + half_x, x1 - half_x + 1e-9, 0.02)
-                       for y in np.arange(y0 + half_y, y1 - half_y + 1e-9, 0.02)]
+        standing = [(*footprint(o), z) for o in self.layout.furniture if o.on == node]
+        if standing and place.center[2] >= f.size[2] - 1e-6:  # its top: an appliance standing there is in the way
+            near = np.vstack([near, standing])
+        xs = (x0 + half_x, x1 - half_x) if x1 - x0 >= 2 * half_x else ((x0 + x1) / 2,) * 2  # across: its middle
+        ys = (y0 + half_y, y1 - half_y) if y1 - y0 >= 2 * half_y else ((y0 + y1) / 2,) * 2
+        candidates = [(rng.uniform(*xs), rng.uniform(*ys)) for _ in range(PLACE_TRIES)]
+        candidates += [(x, y) for x in np.arange(xs[0], xs[1] + 1e-9, 0.02) for y in np.arange(ys[0], ys[1] + 1e-9,
+                                                                                                 0.02)]
         for x, y in candidates:
-            if not _overlaps_any(near, (x - half_x, y - half_y, x + half_x, y + half_y)):
+            rect = (x - half_x, y - half_y, x + half_x, y + half_y)
+            if across and not self._ends_clear(rect, footprint(f)):
+                continue
+            if not _overlaps_any(near, rect):
                 yield Spot((float(x), float(y), z + size[2] / 2 + DROP_LIFT), yaw, node, place_index)
         if cls.family == "cloth":
             for x, y in candidates[:PLACE_TRIES]:  # soft things pile up: on top of what is there
                 landing = self.landing_z(name, (x, y), z + place.clearance)
                 if landing + size[2] / 2 <= z + place.clearance:
                     yield Spot((float(x), float(y), landing), yaw, node, place_index)
+
+    def _ends_clear(self, rect: tuple[float, float, float, float], under: tuple[float, float, float, float]) -> bool:
+        """Whether the parts of world rectangle `rect` beyond the furniture footprint `under` are clear of walls
+        and other furniture (by the floor plan: whatever their height)."""
+        ends = [(rect[0], rect[1], under[0], rect[3]), (under[2], rect[1], rect[2], rect[3]),
+                (rect[0], rect[1], rect[2], under[1]), (rect[0], under[3], rect[2], rect[3])]
+        return all(self.plan.rect_is_free(end, shrink=0.0) for end in ends if end[2] > end[0] and end[3] > end[1])
 
     def floor_spot(self, name: str, room: str, near: tuple[float, float], rng: np.random.Generator,
                    exclude: set[int]) -> Spot:
@@ -202,7 +218,7 @@ class Spots:
         raise PlacementError(f"no free floor for {name} in {room} near {np.round(near, 2).tolist()}")
 
 
-def _keep_out_rects(layout) -> list[tuple[float, float, float, float]]:
+def keep_out_rects(layout) -> list[tuple[float, float, float, float]]:
     """World rectangles in front of doors and drawers (their swing and a person's room to use them), where
     nothing may be left on the floor."""
 
@@ -237,4 +253,4 @@ def _footprint_rect(f) -> tuple[float, float, float, float]:
     return footprint(f)
 
 
-__all__ = ["Spots", "Spot", "PlacementError", "PERSON_RADIUS", "base_height"]
+__all__ = ["Spots", "Spot", "PlacementError", "PERSON_RADIUS", "base_height", "keep_out_rects"]

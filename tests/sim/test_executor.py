@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from homer_sim.graph import INSIDE
+from homer_sim.graph import INSIDE, ON
+from homer_sim.home.catalog import CATALOG
+from homer_sim.home.furniture import footprint
 from homer_sim.person.activities import load_library
 from homer_sim.person.aliases import Resolver
 from homer_sim.person.avatar import AvatarError, add_avatar
@@ -172,3 +174,32 @@ def test_a_put_down_is_lowered_onto_its_spot_and_let_go_there(executor: Executor
     assert np.hypot(*(pos[:2] - np.array(spot.pos[:2]))) < 0.01 and abs(pos[2] - spot.pos[2]) < 0.01
     assert min(lows) > -0.012 and max(lows[:3]) > 0.005  # lowered from above, never pressed through
     assert 1 - 2 * (quat[1] ** 2 + quat[2] ** 2) > 0.99  # upright
+
+
+def test_a_guitar_lies_across_a_chair_and_nothing_is_put_into_an_appliance_on_a_top(executor: Executor) -> None:
+    """A chair's seat holds what is put on it; the 1 m guitar, longer than the seat is wide, lies across it, its
+    middle on the seat, and stays there without moving anything else. A spot on the kitchen cabinet's top keeps
+    clear of the microwave standing on it."""
+    executor.start_day(np.random.default_rng(0))
+    world = executor.world
+    before = world.object_positions().copy()
+    executor.grab("instrument_guitar")
+    executor.put("instrument_guitar", "chair_home_office", None)
+    executor.hands.settle()
+    assert executor.observer.update().parent_of("instrument_guitar") == "chair_home_office"
+    chair = next(f for f in world.layout.furniture if f.name == "chair_home_office")
+    pos = world.object_pose("instrument_guitar")[0]
+    assert np.hypot(pos[0] - chair.pos[0], pos[1] - chair.pos[1]) < chair.size[0] / 2
+    moved = np.linalg.norm(world.object_positions() - before, axis=1) > 0.02
+    assert [n for n, m in zip(world.object_names, moved, strict=True) if m] == ["instrument_guitar"]
+    microwave = next(f for f in world.layout.furniture if f.on == "kitchen_cabinet")
+    x0, y0, x1, y1 = footprint(microwave)
+    spots = executor.spots
+    top = next(k for k, p in spots.places_of("kitchen_cabinet", ON) if p.center[2] >= 0.9 - 1e-6)
+    sx, sy, _ = CATALOG["mug"].size
+    found = list(spots.free_spots("mug", "kitchen_cabinet", top, np.random.default_rng(1), set()))[:200]
+    for spot in found:
+        c, s = abs(np.cos(spot.yaw)), abs(np.sin(spot.yaw))
+        hx, hy = (c * sx + s * sy) / 2, (s * sx + c * sy) / 2
+        assert not (x0 - hx < spot.pos[0] < x1 + hx and y0 - hy < spot.pos[1] < y1 + hy)
+    assert found  # there is room beside the microwave
