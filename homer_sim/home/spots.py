@@ -57,6 +57,7 @@ class Spots:
         self._standing: dict[str, tuple[float, float, float]] = {}
         self._geomid = np.zeros(1, dtype=np.int32)
         self.keep_out = _keep_out_rects(self.layout)
+        self.standing_on = _standing_on(self.layout)
 
     # --- standing ---------------------------------------------------------------------------------------
     def standing_for(self, node: str) -> tuple[float, float, float]:
@@ -152,10 +153,12 @@ class Spots:
         return next(self.free_spots(name, node, place_index, rng, exclude), None)
 
     def free_spots(self, name: str, node: str, place_index: int, rng: np.random.Generator,
-                   exclude: set[int]) -> Iterator[Spot]:
+                   exclude: set[int], clear_of_furniture: bool = False) -> Iterator[Spot]:
         """Every free spot for object `name` on a place of furniture `node` (drawers assumed open): PLACE_TRIES
         random ones, then a scan on a 2 cm grid (so a crowded shelf with one gap left still finds it), then, for
-        cloth, spots on top of what is there."""
+        cloth, spots on top of what is there. With `clear_of_furniture`, none under furniture standing on the
+        place (a coffee maker on a counter: the robot lowered a pill bottle onto it); the person's recorded days
+        were made without, and their replays must choose as they did."""
         f = self.furniture[node]
         place = self._places[node][place_index]
         world_place = place_world(self.layout, f, place, opened=place.part is not None)
@@ -170,6 +173,8 @@ class Spots:
             return
         z = world_place["z"]
         boxes = self.footprints(exclude)
+        if clear_of_furniture:
+            boxes = np.vstack([boxes, self.standing_on.get(node, np.zeros((0, 5)))])
         near = boxes[(boxes[:, 4] > z - 0.05) & (boxes[:, 4] < z + place.clearance)]
         candidates = [(rng.uniform(x0 + half_x, x1 - half_x), rng.uniform(y0 + half_y, y1 - half_y))
                       for _ in range(PLACE_TRIES)]
@@ -216,6 +221,16 @@ def _keep_out_rects(layout) -> list[tuple[float, float, float, float]]:
         corners = local_to_world(f, np.array([[d / 2, -w / 2 - 0.05, 0], [d / 2 + reach, w / 2 + 0.05, 0]]))
         rects.append((corners[:, 0].min(), corners[:, 1].min(), corners[:, 0].max(), corners[:, 1].max()))
     return rects
+
+
+def _standing_on(layout) -> dict[str, np.ndarray]:
+    """Per furniture, (x0, y0, x1, y1, z_bottom) rows of the furniture standing on it (a coffee maker on a
+    counter): no free spot lies under them."""
+    rows: dict[str, list] = {}
+    for f in layout.furniture:
+        if f.on is not None:
+            rows.setdefault(f.on, []).append([*footprint(f), base_height(layout, f)])
+    return {name: np.array(r, dtype=float) for name, r in rows.items()}
 
 
 def _rotated_half(size, yaw: float) -> tuple[float, float]:

@@ -73,9 +73,8 @@ class Place:
         if shelves:
             return self._place_in_shelf(name, node, shelves)
         covered = covered_places(self.spots, node, relation)  # under a level above: from the front, as shelves
-        index = self.world.object_index(name)
         spots = _spread([spot for k, _ in self.spots.places_of(node, relation) if k not in covered
-                         for spot in islice(self.spots.free_spots(name, node, k, self.rng, {index}), SPOT_DRAWS)],
+                         for spot in islice(self._free_spots(name, node, k), SPOT_DRAWS)],
                         TOP_SPOT_GAP, 2 * TOP_SPOTS)
         spots = sorted(spots, key=lambda spot: not self._reachable(name, node, np.array(spot.pos)))[:TOP_SPOTS]
         failures = []
@@ -98,6 +97,12 @@ class Place:
         if not failures:
             return SkillResult(False, f"place: no free spot for {name} on {node}")
         return SkillResult(False, f"place: {'; '.join(failures)}")
+
+    def _free_spots(self, name: str, node: str, place_index: int):
+        """The free spots for `name` on place `place_index` of `node` (see `Spots.free_spots`), none under
+        furniture standing there."""
+        return self.spots.free_spots(name, node, place_index, self.rng, {self.world.object_index(name)},
+                                     clear_of_furniture=True)
 
     def _place_on_floor(self, name: str, room: str) -> SkillResult:
         """Put the held `name` on a free spot of the floor of `room`: near the robot when it is in that room,
@@ -323,7 +328,7 @@ class Place:
         furniture = self.navigator.furniture[node]
         out = self.navigator.front_normal(node)
         front = np.array(furniture.pos) + out * furniture.size[1] / 2
-        drawn = sorted(((spot, k) for k in places for spot in self.spots.free_spots(name, node, k, self.rng, {index})),
+        drawn = sorted(((spot, k) for k in places for spot in self._free_spots(name, node, k)),
                        key=lambda pair: float(np.dot(front - pair[0].pos[:2], out)))
         spots = _spread([spot for spot, _ in drawn], SHELF_SPOT_GAP, SHELF_SPOTS)
         on = {id(spot): k for spot, k in drawn}
