@@ -151,6 +151,16 @@ def drawer_rim(world, furniture: str, position: np.ndarray) -> float | None:
     """Height (m) of the top of the front of the drawer of `furniture` that holds the point `position` (m,
     shape (3,)) above its floor and below that top, or None where no drawer does. Something lifted out of a
     drawer must rise past it before it is carried towards the robot standing in front."""
+    name = drawer_holding(world, furniture, position)
+    if name is None:
+        return None
+    front = world.model.geom(f"{name}/front").id
+    return float(world.data.geom_xpos[front][2] + world.model.geom_size[front][2])
+
+
+def drawer_holding(world, furniture: str, position: np.ndarray) -> str | None:
+    """The articulation name of the drawer of `furniture` that holds the point `position` (m, shape (3,)) above
+    its floor and below the top of its front, or None where no drawer does."""
     model, data = world.model, world.data
     for a in world.articulations.values():
         if a.furniture != furniture or a.joint_type != "slide":
@@ -160,7 +170,7 @@ def drawer_rim(world, furniture: str, position: np.ndarray) -> float | None:
         half = model.geom_size[floor]
         rim = float(data.geom_xpos[front][2] + model.geom_size[front][2])
         if abs(local[0]) <= half[0] and abs(local[1]) <= half[1] and 0.0 < local[2] and position[2] < rim:
-            return rim
+            return a.name
     return None
 
 
