@@ -25,6 +25,7 @@ from planners.motion.control import Controller
 from planners.motion.ik import IKSolver
 from planners.motion.navigation import Navigator
 from planners.skills.doors import PartMover
+from planners.skills.parts import shelves_inside
 from planners.skills.pick import Pick
 from planners.skills.place import Place
 from planners.skills.result import SkillResult
@@ -58,8 +59,20 @@ class Robot:
         return self.arm.tuck
 
     def pick(self, name: str, node: str | None = None, into: str | None = None) -> SkillResult:
-        """Grasp object `name` and lift it (see `planners.skills.pick.Pick.pick`)."""
-        return self._pick.pick(name, node, into)
+        """Grasp object `name` and lift it (see `planners.skills.pick.Pick.pick`). One that has fallen over is
+        taken from above as it lies; where it goes next onto a shelf (`into`), which takes it upright and held
+        from the side, it is first stood up on the nearest open top without a door (`set_down` stands it up as
+        it lowers it) and picked again."""
+        fallen = self.arm.fallen_over(name)
+        result = self._pick.pick(name, node, into)
+        if not (result.success and fallen and into is not None
+                and shelves_inside(self.spots, self.navigator.furniture.get(into), into, None)):
+            return result
+        stood = self.set_down({a.furniture for a in self.world.articulations.values()})
+        if not stood.success:
+            return SkillResult(False, f"{name}: picked as it lay, then {stood.reason}")
+        at = self.observer.update().anchor_of(name, self.world.object_names)
+        return self._pick.pick(name, at if at in self.navigator.furniture else None, into)
 
     def place(self, node: str, relation: int | None = None) -> SkillResult:
         """Put the held object at a free spot ON or INSIDE furniture `node`, release it and retreat (see
