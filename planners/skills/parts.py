@@ -220,3 +220,15 @@ def parts_to_open(world, graph, parts, obj: str) -> list[str]:
     height = {p: world.data.xpos[world.model.body(p).id][2] for p in drawers}
     lying_in = max((p for p in drawers if height[p] < z), key=height.get, default=None)
     return [p for p in parts if p not in drawers or (inside and p == lying_in)]
+
+
+def parts_to_place(world, spots: Spots, parts, node: str) -> list[str]:
+    """Of furniture `node`'s `parts` (doors or drawers, `<furniture>/<part>`) those to open to put something on
+    or in it as `Place.place` does when no relation is asked for (on the places `Spots.places_of` gives then):
+    every door where it is used inside (a door covers every shelf behind it), a drawer where one of those
+    places is in it; none where it is used on its top (three drawers opened in front of a dresser whose top
+    took the socks)."""
+    used = [place for _, place in spots.places_of(node, None)]
+    drawers = {f"{node}/{place.part}" for place in used if place.part is not None}
+    behind_doors = any(place.part is None and place.relation == INSIDE for place in used)
+    return [p for p in parts if p in drawers or (behind_doors and world.articulations[p].joint_type == "hinge")]
