@@ -23,7 +23,7 @@ from enum import Enum
 import numpy as np
 
 from homer_sim.graph import INSIDE, ON, RELATION_NAMES
-from homer_sim.home.furniture import Furniture, furniture_geometry
+from homer_sim.home.furniture import Furniture, Place, furniture_geometry
 from homer_sim.home.spots import Spots
 from planners.grasps.geometry import axis_rotation, matrix_to_quat
 
@@ -232,3 +232,14 @@ def parts_to_place(world, spots: Spots, parts, node: str) -> list[str]:
     drawers = {f"{node}/{place.part}" for place in used if place.part is not None}
     behind_doors = any(place.part is None and place.relation == INSIDE for place in used)
     return [p for p in parts if p in drawers or (behind_doors and world.articulations[p].joint_type == "hinge")]
+
+
+def rim_above(furniture: Furniture, place: Place) -> float:
+    """How high (m) the furniture's own boxes lying wholly between the front edge of `place` and the
+    furniture's front rise above it, over its width (a sink's rim round its basin; nothing for a top): a hand
+    held level lowering something that deep meets the rim with its wrist."""
+    x0 = place.center[0] + place.half_xy[0]
+    y0, y1 = place.center[1] - place.half_xy[1], place.center[1] + place.half_xy[1]
+    tops = [b.center[2] + b.half[2] for b in furniture_geometry(furniture).boxes
+            if b.center[0] - b.half[0] >= x0 - 1e-6 and b.center[1] - b.half[1] < y1 and b.center[1] + b.half[1] > y0]
+    return max(tops, default=place.center[2]) - place.center[2]
