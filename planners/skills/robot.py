@@ -32,8 +32,6 @@ from planners.skills.result import SkillResult
 
 BASIN_RIM = 0.08  # m a rim in front may rise above a place before it is a basin, entered only from above (a
 # shower's 6 cm curb is not one, a sink's 14 cm rim is)
-
-
 CROWDED = 0.5  # m farther an open top counts, for a set-down, per thing on or in it (the crowded counter by the
 # coffee maker was nearest, and a pill bottle stood up there knocked the knife block and the loaf)
 
@@ -67,9 +65,10 @@ class Robot:
 
     def pick(self, name: str, node: str | None = None, into: str | None = None) -> SkillResult:
         """Grasp object `name` and lift it (see `planners.skills.pick.Pick.pick`). One that has fallen over is
-        taken from above as it lies; where it goes next onto a shelf (`into`), which takes it upright and held
+        taken from above as it lies; where it goes next (`into`) onto a shelf, which takes it upright and held
         from the side, it is first stood up on the nearest open top without a door (`set_down` stands it up as
-        it lowers it) and picked again."""
+        it lowers it) and picked again; so is one held from the side that goes into a basin (`_into_basin`),
+        picked again from above."""
         fallen = self.arm.fallen_over(name)
         result = self._pick.pick(name, node, into)
         if not result.success or into is None:
