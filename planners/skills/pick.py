@@ -93,10 +93,11 @@ class Pick:
         if self.arm.fallen_over(name):  # from above, as an upright box of the extents it has as it lies
             body = self.world.object_body_ids[self.world.object_index(name)]
             lying = lying_as(cls, self.world.data.xmat[body].reshape(3, 3))
-            if lying is None or self._standing_on(node, position, lying[0].size[2])[0]:
+            quat = np.array(yaw_quat(lying[1])) if lying is not None else quat
+            if (lying is None or self._standing_on(node, position, lying[0].size[2])[0]
+                    or not top_grasps(lying[0], position, quat, self.controller.q()[:2])):
                 return SkillResult(False, f"{name}: it has fallen over (lies on its side), and no grasp fits it so")
-            cls, yaw = lying
-            return self._pick_from_above(name, node, cls, position, np.array(yaw_quat(yaw)), [])
+            return self._pick_from_above(name, node, lying[0], position, quat, [])
         furniture = self.navigator.furniture.get(node)
         inside = graph.relation_of(name) == RELATION_NAMES[INSIDE] and furniture is not None
         covered, low = self._standing_on(node, position, cls.size[2])
