@@ -91,7 +91,7 @@ FURNITURE = (
        rgba=WHITE),
     _f("bathroom_cabinet", "bathroom_cabinet", "cabinet", "bathroom", (3.25, 6.8), "W", (0.8, 0.4, 1.2),
        shelves=(0.45, 0.85), rgba=WHITE),
-    _f("bathroom_shelf", "bathroom_shelf", "shelf", "bathroom", (1.5, 4.725), "N", (0.8, 0.35, 1.0),
+    _f("bathroom_shelf", "bathroom_shelf", "shelf", "bathroom", (0.225, 6.4), "E", (0.8, 0.35, 1.0),
        shelves=(0.45,), rgba=WHITE),
     _f("washing_machine", "washing_machine", "cabinet", "bathroom", (3.15, 5.5), "W", (0.6, 0.6, 0.85),
        "appliance", top_place=True, rgba=WHITE, plinth=0.15),

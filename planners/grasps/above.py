@@ -30,6 +30,7 @@ from planners.grasps.geometry import extent, is_round, top_rotation
 OFFSET_MIN = 0.01  # m: off-centre grasps that move the palm less are not worth a try
 RAISED_HOLD = 0.015  # m of an object's top that the pads of a raised grasp hold
 RAISE_MIN = 0.005  # m: grasps raised less than this are not worth a try
+LYING_TILT = math.radians(15.0)  # rad a fallen object's resting face may lean off the level to be grasped as it lies
 SQUARE_MIN_TURN = math.radians(3.0)  # rad a grasp from above must turn to square the palm to a drawer's walls for
 # a squared grasp to be worth a try
 
@@ -60,6 +61,28 @@ def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_x
                 grasps.append(Grasp(centre, top_rotation(finger_yaw), min(GRIPPER_OPEN, span / 2 + margin),
                                     GraspKind(Family.TOP, turned=turned, narrow=opened_narrow)))
     return grasps
+
+
+def lying_as(cls: ObjectClass, rotation: np.ndarray) -> tuple[ObjectClass, float] | None:
+    """A solid object (no grip feature, no cavity) that has fallen over and rests on a side, with body `rotation`
+    (shape (3, 3)), described as an upright box of the extents it has as it lies: (that class, the yaw of its
+    body x, rad), for the grasps from above of an upright object (`top_grasps`); None where it lies otherwise (a
+    box on an edge) or is no such object. A cylinder on its side lies with its axis level at any roll."""
+    if cls.handle is not None or cls.is_container:
+        return None
+    sizes = np.asarray(cls.size, dtype=float)
+    if is_round(cls):
+        if abs(rotation[2, 2]) > math.sin(LYING_TILT):
+            return None
+        axes, extents = (2, 0, 0), (sizes[2], sizes[0], sizes[0])
+    else:
+        down = int(np.argmax(np.abs(rotation[2])))
+        if abs(rotation[2, down]) < math.cos(LYING_TILT):
+            return None
+        axes = tuple(k for k in range(3) if k != down) + (down,)
+        extents = tuple(sizes[k] for k in axes)
+    yaw = math.atan2(rotation[1, axes[0]], rotation[0, axes[0]])
+    return replace(cls, family="box", size=tuple(float(e) for e in extents)), yaw
 
 
 def squared_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, wall_yaw: float) -> list[Grasp]:

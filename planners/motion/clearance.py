@@ -78,16 +78,24 @@ class ClearanceCheck:
         return {int(g) for g in np.concatenate([g1[touching], g2[touching]]) if not self.robot[g]}
 
     def clear(self, q: np.ndarray, articulation=None, value: float = 0.0, held: Held | None = None,
-              fingers: bool = False) -> bool:
+              fingers: bool = False, riders: tuple[int, ...] = ()) -> bool:
         """True if configuration q (shape (13,)) keeps MARGIN from the apartment, with `articulation` (if
         given) at joint value `value` (rad or m), `held` (if given) in the hand, and everything else where it
-        is now. With `fingers`, the fingers are checked too (a hand swinging free touches nothing at all)."""
+        is now, but the objects whose free joints' qpos addresses are `riders` (in a drawer being moved): they
+        move with the drawer. With `fingers`, the fingers are checked too (a hand swinging free touches nothing
+        at all)."""
         d = self.scratch
         d.qpos[:] = self.world.data.qpos
         d.qpos[self.qpos_adr] = q
         if articulation is not None:
             d.qpos[articulation.qpos_adr] = value
         mujoco.mj_kinematics(self.model, d)
+        if riders and articulation is not None and articulation.joint_type == "slide":
+            body = self.model.jnt_bodyid[articulation.joint_id]
+            shift = d.xpos[body] - self.world.data.xpos[body]
+            for adr in riders:
+                d.qpos[adr:adr + 3] += shift
+            mujoco.mj_kinematics(self.model, d)
         robot, checked = self.robot, self.robot if fingers else self.checked
         if held is None:
             mujoco.mj_collision(self.model, d)

@@ -33,6 +33,7 @@ from planners.skills.parts import (
     PartGrasp,
     PartHold,
     PartMotion,
+    drawer_holding,
     edge_grasp,
     handle_grasp,
     segment_distance,
@@ -114,6 +115,17 @@ class PartMover:
                               f"{self.world.openness(name):.2f}")
         log.info("%s: %s phase to %.2f, openness now %.2f", name, hold, target, self.world.openness(name))
 
+    def _riders(self, motion: PartMotion) -> tuple[int, ...]:
+        """The qpos addresses of the objects in the drawer being moved (none for a door): they move with it, so
+        the clearance checks of the followed motion move them too (a dress in the dresser's middle drawer, left
+        where it lay, stood in the palm's way as the drawer closed, and the close gave up at 0.10 m)."""
+        a = motion.articulation
+        if a.joint_type != "slide":
+            return ()
+        positions = self.world.data.xpos[self.world.object_body_ids]
+        return tuple(int(self.world.object_qpos_adr[k]) for k, position in enumerate(positions)
+                     if drawer_holding(self.world, a.furniture, position) == a.name)
+
     def _free_edge_y(self, motion: PartMotion) -> float:
         """Local y (m) of the door panel's edge farthest from the hinge axis (the body origin)."""
         c, h = motion.panel_center, motion.panel_half
@@ -150,14 +162,15 @@ class PartMover:
         rot = motion.pose_at(motion.value)[1] @ grasp.rotation
         before = pos - APPROACH * rot[:, 0]
         q0 = self.arm.tuck.copy()
+        riders = self._riders(motion)
         for base in base_candidates(pos, rot, None):
             if not self._free(np.array(base[:2]), motion, motion.value):
                 continue
             pre = self._solve_at(q0, base, before, quat, seeds=True)
-            if not pre.converged or not self.check.clear(pre.q, motion.articulation, motion.value):
+            if not pre.converged or not self.check.clear(pre.q, motion.articulation, motion.value, riders=riders):
                 continue
             at = self._solve_at(pre.q, base, pos, quat, seeds=False)
-            if at.converged and self.check.clear(at.q, motion.articulation, motion.value):
+            if at.converged and self.check.clear(at.q, motion.articulation, motion.value, riders=riders):
                 return at.q, pre.q
         raise PhaseFailed(f"no free base pose from which the {grasp.kind} at {np.round(pos, 2).tolist()} is "
                           "reachable")
@@ -179,7 +192,7 @@ class PartMover:
     def _plan_follow(self, motion: PartMotion, grasp: PartGrasp, values: np.ndarray,
                      q_start: np.ndarray) -> list[np.ndarray]:
         """IK configurations holding the grasp at each joint value, each with a free base pose."""
-        path, q = [], q_start
+        path, q, riders = [], q_start, self._riders(motion)
         for value in values:
             pos, quat = motion.grip_target(grasp, float(value))
             rot = motion.pose_at(float(value))[1] @ grasp.rotation
@@ -188,7 +201,7 @@ class PartMover:
                     continue
                 result = self._solve_at(q, base, pos, quat, seeds=False)
                 if (result.converged and np.max(np.abs(result.q[3:11] - q[3:11])) < MAX_ARM_JUMP
-                        and self.check.clear(result.q, motion.articulation, float(value))):
+                        and self.check.clear(result.q, motion.articulation, float(value), riders=riders)):
                     q = result.q
                     break
             else:

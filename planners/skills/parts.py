@@ -23,7 +23,7 @@ from enum import Enum
 import numpy as np
 
 from homer_sim.graph import INSIDE, ON, RELATION_NAMES
-from homer_sim.home.furniture import Furniture, furniture_geometry
+from homer_sim.home.furniture import Furniture, Place, furniture_geometry
 from homer_sim.home.spots import Spots
 from planners.grasps.geometry import axis_rotation, matrix_to_quat
 
@@ -151,6 +151,16 @@ def drawer_rim(world, furniture: str, position: np.ndarray) -> float | None:
     """Height (m) of the top of the front of the drawer of `furniture` that holds the point `position` (m,
     shape (3,)) above its floor and below that top, or None where no drawer does. Something lifted out of a
     drawer must rise past it before it is carried towards the robot standing in front."""
+    name = drawer_holding(world, furniture, position)
+    if name is None:
+        return None
+    front = world.model.geom(f"{name}/front").id
+    return float(world.data.geom_xpos[front][2] + world.model.geom_size[front][2])
+
+
+def drawer_holding(world, furniture: str, position: np.ndarray) -> str | None:
+    """The articulation name of the drawer of `furniture` that holds the point `position` (m, shape (3,)) above
+    its floor and below the top of its front, or None where no drawer does."""
     model, data = world.model, world.data
     for a in world.articulations.values():
         if a.furniture != furniture or a.joint_type != "slide":
@@ -160,7 +170,7 @@ def drawer_rim(world, furniture: str, position: np.ndarray) -> float | None:
         half = model.geom_size[floor]
         rim = float(data.geom_xpos[front][2] + model.geom_size[front][2])
         if abs(local[0]) <= half[0] and abs(local[1]) <= half[1] and 0.0 < local[2] and position[2] < rim:
-            return rim
+            return a.name
     return None
 
 
@@ -210,3 +220,26 @@ def parts_to_open(world, graph, parts, obj: str) -> list[str]:
     height = {p: world.data.xpos[world.model.body(p).id][2] for p in drawers}
     lying_in = max((p for p in drawers if height[p] < z), key=height.get, default=None)
     return [p for p in parts if p not in drawers or (inside and p == lying_in)]
+
+
+def parts_to_place(world, spots: Spots, parts, node: str) -> list[str]:
+    """Of furniture `node`'s `parts` (doors or drawers, `<furniture>/<part>`) those to open to put something on
+    or in it as `Place.place` does when no relation is asked for (on the places `Spots.places_of` gives then):
+    every door where it is used inside (a door covers every shelf behind it), a drawer where one of those
+    places is in it; none where it is used on its top (three drawers opened in front of a dresser whose top
+    took the socks)."""
+    used = [place for _, place in spots.places_of(node, None)]
+    drawers = {f"{node}/{place.part}" for place in used if place.part is not None}
+    behind_doors = any(place.part is None and place.relation == INSIDE for place in used)
+    return [p for p in parts if p in drawers or (behind_doors and world.articulations[p].joint_type == "hinge")]
+
+
+def rim_above(furniture: Furniture, place: Place) -> float:
+    """How high (m) the furniture's own boxes lying wholly between the front edge of `place` and the
+    furniture's front rise above it, over its width (a sink's rim round its basin; nothing for a top): a hand
+    held level lowering something that deep meets the rim with its wrist."""
+    x0 = place.center[0] + place.half_xy[0]
+    y0, y1 = place.center[1] - place.half_xy[1], place.center[1] + place.half_xy[1]
+    tops = [b.center[2] + b.half[2] for b in furniture_geometry(furniture).boxes
+            if b.center[0] - b.half[0] >= x0 - 1e-6 and b.center[1] - b.half[1] < y1 and b.center[1] + b.half[1] > y0]
+    return max(tops, default=place.center[2]) - place.center[2]

@@ -15,10 +15,17 @@ import numpy as np
 
 from homer_sim.graph import INSIDE, ON, RELATION_NAMES
 from homer_sim.home.catalog import CATALOG
-from homer_sim.home.placement import place_world
+from homer_sim.home.placement import place_world, yaw_quat
 from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
-from planners.grasps.above import offset_grasps, raised_grasps, rim_approach, squared_grasps, top_grasps
+from planners.grasps.above import (
+    lying_as,
+    offset_grasps,
+    raised_grasps,
+    rim_approach,
+    squared_grasps,
+    top_grasps,
+)
 from planners.grasps.candidate import Grasp, disturbed, ungraspable_reason
 from planners.grasps.features import hang_rotation
 from planners.grasps.geometry import matrix_to_quat
@@ -80,11 +87,17 @@ class Pick:
         reason = ungraspable_reason(cls)
         if reason is not None:
             return SkillResult(False, f"{name}: not graspable ({reason})")
-        if self.arm.fallen_over(name):  # every grasp here is for an object standing up
-            return SkillResult(False, f"{name}: it has fallen over (lies on its side), and no grasp fits it so")
         graph = self.observer.update()
         node = node or graph.parent_of(name)
         position, quat = self.world.object_pose(name)
+        if self.arm.fallen_over(name):  # from above, as an upright box of the extents it has as it lies
+            body = self.world.object_body_ids[self.world.object_index(name)]
+            lying = lying_as(cls, self.world.data.xmat[body].reshape(3, 3))
+            quat = np.array(yaw_quat(lying[1])) if lying is not None else quat
+            if (lying is None or self._standing_on(node, position, lying[0].size[2])[0]
+                    or not top_grasps(lying[0], position, quat, self.controller.q()[:2])):
+                return SkillResult(False, f"{name}: it has fallen over (lies on its side), and no grasp fits it so")
+            return self._pick_from_above(name, node, lying[0], position, quat, [])
         furniture = self.navigator.furniture.get(node)
         inside = graph.relation_of(name) == RELATION_NAMES[INSIDE] and furniture is not None
         covered, low = self._standing_on(node, position, cls.size[2])

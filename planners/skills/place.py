@@ -37,6 +37,8 @@ TOP_SPOTS = 4  # free spots on an open top tried for a place (the first one no w
 TOP_SPOT_GAP = 0.08  # m apart at least,
 SPOT_DRAWS = 40  # from this many free spots of each place drawn in turn
 STOPPED_ABOVE = 0.02  # m above its spot a lowered object may stop before it counts as stopped on something
+SPOT_MISS = 0.05  # m beside its spot a lowered object may come down and still be let go (a loaf let go 16 cm
+# short of its spot, where the base met the counter, landed on a towel and fell over)
 DROP_HEIGHT = 0.05  # m above its spot a lowered object touching nothing but the robot is let fall at most
 SHELF_SPOTS = 6  # free spots tried for a place inside, nearest the front first, then half as many on each other
 # shelf (rack),
@@ -73,9 +75,8 @@ class Place:
         if shelves:
             return self._place_in_shelf(name, node, shelves)
         covered = covered_places(self.spots, node, relation)  # under a level above: from the front, as shelves
-        index = self.world.object_index(name)
         spots = _spread([spot for k, _ in self.spots.places_of(node, relation) if k not in covered
-                         for spot in islice(self.spots.free_spots(name, node, k, self.rng, {index}), SPOT_DRAWS)],
+                         for spot in islice(self._free_spots(name, node, k), SPOT_DRAWS)],
                         TOP_SPOT_GAP, 2 * TOP_SPOTS)
         spots = sorted(spots, key=lambda spot: not self._reachable(name, node, np.array(spot.pos)))[:TOP_SPOTS]
         failures = []
@@ -98,6 +99,10 @@ class Place:
         if not failures:
             return SkillResult(False, f"place: no free spot for {name} on {node}")
         return SkillResult(False, f"place: {'; '.join(failures)}")
+
+    def _free_spots(self, name: str, node: str, place_index: int):
+        """The free spots for `name` on place `place_index` of `node` (see `Spots.free_spots`)."""
+        return self.spots.free_spots(name, node, place_index, self.rng, {self.world.object_index(name)})
 
     def _place_on_floor(self, name: str, room: str) -> SkillResult:
         """Put the held `name` on a free spot of the floor of `room`: near the robot when it is in that room,
@@ -202,7 +207,9 @@ class Place:
                     ) -> SkillResult:
         """With the held `name` lowered for `target` (m, its spot on `node`; the grip site at `release`, m, at
         `quat`): let go and retreat, unless its lowest point stopped more than STOPPED_ABOVE m above where its bottom
-        goes (it came down on something): then back up APPROACH m, still holding it. Where it stopped at most
+        goes (it came down on something) or, for a thing with an up, its centre is more than SPOT_MISS m beside
+        the spot (the arm fell short; cloth hangs off centre and lies as it lands): then back up APPROACH m, still
+        holding it. Where it stopped at most
         DROP_HEIGHT m above touching nothing but the robot (the arm reaches no lower: a vacuum cleaner held by its
         handle 2.6-4 cm above the floor), it is let go there."""
         index = self.world.object_index(name)
@@ -213,6 +220,10 @@ class Place:
         if stopped > STOPPED_ABOVE and (stopped > DROP_HEIGHT or self._touches_apartment(name)):
             self.arm.grip_line(release + np.array([0.0, 0.0, APPROACH]), quat)
             return SkillResult(False, f"place: {name} stopped {stopped * 100:.1f} cm above its spot on {node}")
+        missed = float(np.linalg.norm(self.world.object_pose(name)[0][:2] - target[:2]))
+        if missed > SPOT_MISS and CATALOG[self.world.layout.objects[index].cls].family not in NO_UP_FAMILIES:
+            self.arm.grip_line(release + np.array([0.0, 0.0, APPROACH]), quat)
+            return SkillResult(False, f"place: {name} came down {missed * 100:.1f} cm beside its spot on {node}")
         opening = max(TOP_RELEASE_OPENING, self._held_opening() + RELEASE_OPENING)
         return self._let_go(name, node, opening, self._retreat(release, quat))
 
@@ -323,7 +334,7 @@ class Place:
         furniture = self.navigator.furniture[node]
         out = self.navigator.front_normal(node)
         front = np.array(furniture.pos) + out * furniture.size[1] / 2
-        drawn = sorted(((spot, k) for k in places for spot in self.spots.free_spots(name, node, k, self.rng, {index})),
+        drawn = sorted(((spot, k) for k in places for spot in self._free_spots(name, node, k)),
                        key=lambda pair: float(np.dot(front - pair[0].pos[:2], out)))
         spots = _spread([spot for spot, _ in drawn], SHELF_SPOT_GAP, SHELF_SPOTS)
         on = {id(spot): k for spot, k in drawn}

@@ -15,19 +15,25 @@ from collections.abc import Collection
 
 import numpy as np
 
-from homer_sim.graph import ON
+from homer_sim.graph import INSIDE, ON
 from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
 from homer_sim.robot_spec import ROBOT, RobotSpec
-from planners.motion.arm import Arm
+from planners.motion.arm import PITCHED_HAND, Arm
 from planners.motion.clearance import ClearanceCheck
 from planners.motion.control import Controller
 from planners.motion.ik import IKSolver
 from planners.motion.navigation import Navigator
 from planners.skills.doors import PartMover
+from planners.skills.parts import rim_above, shelves_inside
 from planners.skills.pick import Pick
 from planners.skills.place import Place
 from planners.skills.result import SkillResult
+
+BASIN_RIM = 0.08  # m a rim in front may rise above a place before it is a basin, entered only from above (a
+# shower's 6 cm curb is not one, a sink's 14 cm rim is)
+CROWDED = 0.5  # m farther an open top counts, for a set-down, per thing on or in it (the crowded counter by the
+# coffee maker was nearest, and a pill bottle stood up there knocked the knife block and the loaf)
 
 
 class Robot:
@@ -58,8 +64,37 @@ class Robot:
         return self.arm.tuck
 
     def pick(self, name: str, node: str | None = None, into: str | None = None) -> SkillResult:
-        """Grasp object `name` and lift it (see `planners.skills.pick.Pick.pick`)."""
-        return self._pick.pick(name, node, into)
+        """Grasp object `name` and lift it (see `planners.skills.pick.Pick.pick`). One that has fallen over is
+        taken from above as it lies; where it goes next (`into`) onto a shelf, which takes it upright and held
+        from the side, it is first stood up on the nearest open top without a door (`set_down` stands it up as
+        it lowers it) and picked again; so is one held from the side that goes into a basin (`_into_basin`),
+        picked again from above."""
+        fallen = self.arm.fallen_over(name)
+        result = self._pick.pick(name, node, into)
+        if not result.success or into is None:
+            return result
+        if fallen and shelves_inside(self.spots, self.navigator.furniture.get(into), into, None):
+            how = "picked as it lay"
+        elif self._into_basin(into) and np.linalg.norm(self.world.data.site("robot/grip").xmat[[0, 3]]) > \
+                PITCHED_HAND:  # the grip x axis's horizontal part: not from above
+            how = "held from the side"
+        else:
+            return result
+        stood = self.set_down({a.furniture for a in self.world.articulations.values()})
+        if not stood.success:
+            return SkillResult(False, f"{name}: {how}, then {stood.reason}")
+        at = self.observer.update().anchor_of(name, self.world.object_names)
+        return self._pick.pick(name, at if at in self.navigator.furniture else None, into)
+
+    def _into_basin(self, node: str) -> bool:
+        """Whether `node` is used inside a place sunk more than BASIN_RIM m below a rim in front of it, open
+        above (a sink's basin): a hand held level lowering something in there meets the rim with its wrist (a
+        can of wipes from a cabinet's shelf stopped 15-17 cm above the basin), one from above does not."""
+        furniture = self.spots.furniture.get(node)
+        if furniture is None or shelves_inside(self.spots, self.navigator.furniture.get(node), node, None):
+            return False
+        return any(place.relation == INSIDE and place.part is None and rim_above(furniture, place) > BASIN_RIM
+                   for _, place in self.spots.places_of(node, None))
 
     def place(self, node: str, relation: int | None = None) -> SkillResult:
         """Put the held object at a free spot ON or INSIDE furniture `node`, release it and retreat (see
@@ -68,13 +103,16 @@ class Robot:
 
     def set_down(self, avoid: Collection[str] = (), tries: int = 3) -> SkillResult:
         """Put the held object down for a while on the open top nearest the robot (furniture with a place ON it,
-        not in `avoid`, say furniture with doors), the `tries` nearest in turn: done when it stands on the top or
-        on what lies there, the hand empty."""
+        not in `avoid`, say furniture with doors; each thing on or in one counts CROWDED m farther), the `tries`
+        nearest in turn: done when it stands on the top or on what lies there, the hand empty."""
         name = self.held
         if name is None:
             return SkillResult(False, "set-down: the robot holds nothing")
         x, y = self.controller.q()[:2]
-        tops = sorted((float(np.hypot(f.pos[0] - x, f.pos[1] - y)), f.name) for f in self.world.layout.furniture
+        graph = self.observer.update()
+        things = [graph.anchor_of(n, self.world.object_names) for n in self.world.object_names if n != name]
+        tops = sorted((float(np.hypot(f.pos[0] - x, f.pos[1] - y)) + CROWDED * things.count(f.name), f.name)
+                      for f in self.world.layout.furniture
                       if f.name not in avoid and f.name in self.navigator.furniture
                       and self.spots.places_of(f.name, ON))
         result = SkillResult(False, f"set-down: no open top for {name}")

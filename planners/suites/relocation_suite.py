@@ -217,18 +217,20 @@ def _stop_after(index: int, last: int) -> None:
 
 
 def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, destination: str) -> str | None:
-    """Open what closes over `source` and `destination`, pick `obj`, place it, close what was opened; None when
-    every skill succeeded, else the first failure's reason prefixed with its skill. Where both close (two pieces
-    of furniture with doors or drawers), one is open at a time: two open doors can leave no way between them (a
-    cupboard's and the dishwasher's across the kitchen), and a full hand opens and closes nothing; so the object
-    is set down on the nearest open top (`Robot.set_down`) while the source closes and the destination opens."""
-    from planners.skills.parts import parts_to_open
+    """Open what closes over `source` and what `destination` is used behind (`parts_to_place`), pick `obj`, place
+    it, close what was opened; None when every skill succeeded, else the first failure's reason prefixed with its
+    skill. Where both close (two pieces of furniture with doors or drawers), one is open at a time: two open doors
+    can leave no way between them (a cupboard's and the dishwasher's across the kitchen), and a full hand opens
+    and closes nothing; so the object is set down on the nearest open top (`Robot.set_down`) while the source
+    closes and the destination opens."""
+    from planners.skills.parts import parts_to_open, parts_to_place
 
     graph = robot.observer.update()
     anchor = graph.anchor_of(source, robot.world.object_names)
     at = anchor if anchor in robot.navigator.furniture else None
     first = parts_to_open(robot.world, graph, containers.get(anchor, []), obj)
-    second = [p for p in containers.get(destination, []) if p not in first]
+    second = [p for p in parts_to_place(robot.world, robot.spots, containers.get(destination, []), destination)
+              if p not in first]
     both = bool(first and second)
     failure = _open(robot, first if both else first + second)
     if failure is not None:

@@ -9,7 +9,15 @@ import numpy as np
 import pytest
 
 from homer_sim.home.catalog import CATALOG
-from planners.grasps.above import RAISED_HOLD, offset_grasps, raised_grasps, rim_approach, squared_grasps, top_grasps
+from planners.grasps.above import (
+    RAISED_HOLD,
+    lying_as,
+    offset_grasps,
+    raised_grasps,
+    rim_approach,
+    squared_grasps,
+    top_grasps,
+)
 from planners.grasps.candidate import (
     FINGER_HALF_THICKNESS,
     GRIPPER_OPEN,
@@ -417,3 +425,29 @@ def test_raised_grasps_pass_over_a_low_neighbour_and_still_hold_the_top() -> Non
     rim = replace(grasps[0], kind=GraspKind(Family.RIM))
     assert raised_grasps(charger, position, [rim]) == []  # only grasps from above
 
+
+
+def _turn(axis: tuple[float, float, float], angle: float) -> np.ndarray:
+    """Rotation matrix of `angle` rad about unit `axis` (Rodrigues)."""
+    k = np.array(axis, dtype=float)
+    cross = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + math.sin(angle) * cross + (1 - math.cos(angle)) * cross @ cross
+
+
+def test_a_fallen_object_is_grasped_as_the_box_it_makes_lying() -> None:
+    cylinder = CATALOG["painkillers"]  # 4 cm across, 8 cm tall
+    d, h = cylinder.size[0], cylinder.size[2]
+    for roll in (0.0, 0.7, 2.0):  # a cylinder on its side lies so at any roll about its axis
+        rotation = _turn((0.0, 0.0, 1.0), 0.4) @ _turn((0.0, 1.0, 0.0), math.pi / 2) @ _turn((0.0, 0.0, 1.0), roll)
+        lying = lying_as(cylinder, rotation)
+        assert lying is not None
+        cls, yaw = lying
+        assert cls.size == pytest.approx((h, d, d))  # its axis along the new x, level
+        assert math.remainder(yaw - 0.4 - math.pi, math.pi) == pytest.approx(0.0, abs=1e-9)
+        assert top_grasps(cls, np.zeros(3), np.array([math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)]), np.zeros(2))
+    box = CATALOG["food_bread"]  # 25 x 11 x 11 cm, rolled a quarter about its length onto a side
+    cls, _ = lying_as(box, _turn((1.0, 0.0, 0.0), math.pi / 2))
+    assert cls.size == pytest.approx((box.size[0], box.size[2], box.size[1]))
+    assert lying_as(box, _turn((1.0, 0.0, 0.0), math.pi / 4)) is None  # on an edge
+    assert lying_as(cylinder, _turn((1.0, 0.0, 0.0), math.pi / 4)) is None  # leaning, not lying
+    assert lying_as(CATALOG["mug"], _turn((1.0, 0.0, 0.0), math.pi / 2)) is None  # a handle and a cavity

@@ -6,6 +6,8 @@ import mujoco
 import numpy as np
 import pytest
 
+from homer_sim.home.apartment import default_layout
+from homer_sim.home.furniture import furniture_geometry
 from homer_sim.world import World
 from planners.grasps.geometry import matrix_to_quat
 from planners.motion.clearance import ClearanceCheck, Held
@@ -124,3 +126,28 @@ def test_drawer_rim_is_the_front_top_of_the_drawer_holding_a_point() -> None:
         world.data.geom_xpos[above][2] + world.model.geom_size[above][2])
     assert drawer_rim(world, "dresser", shirt + np.array([0.0, 0.0, 1.0])) is None  # above the dresser
     assert drawer_rim(world, "table_dining_room", world.object_pose("bowl")[0]) is None  # no drawers
+
+
+# Parts the robot does not open yet, each with why: strict, so one that opens fails the test until removed here.
+OPEN_FAILS = {"microwave/door": "the fingers close on nothing at the free edge of its small door",
+              "oven/door": "its 4 kg door stops at 0.89 of its range, short of 0.9, touching nothing (cause not found)"}
+
+
+def _every_part() -> list:
+    layout = default_layout()
+    names = [f"{f.name}/{part.name}" for f in layout.furniture for part in furniture_geometry(f).parts]
+    return [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=OPEN_FAILS[n])) if n in OPEN_FAILS else n
+            for n in names]
+
+
+@pytest.mark.physics
+@pytest.mark.parametrize("name", _every_part())
+def test_robot_opens_every_door_and_drawer_of_the_apartment(name: str) -> None:
+    """From the apartment's start, each door and drawer opens: the layout leaves the floor free where the robot
+    stands to hold it (a bathroom shelf by the doorway once left no way to the washing machine's door)."""
+    world = World(extras=[add_robot])
+    world.settle()
+    robot = Robot(world)
+    robot.observer.observe_all()
+    opened = robot.open_articulation(name)
+    assert opened.success, opened.reason

@@ -173,3 +173,17 @@ def test_open_shelves_lower_levels_are_covered_and_a_showers_floor_is_not(world:
     assert covered_places(spots, "shower", None) == []  # its small soap shelf covers little of the floor
     assert covered_places(spots, "table_dining_room", None) == []
 
+
+
+def test_only_a_basin_has_a_rim_a_level_hand_meets() -> None:
+    from homer_sim.home.apartment import default_layout
+    from homer_sim.home.furniture import furniture_geometry
+    from planners.skills.parts import rim_above
+    from planners.skills.robot import BASIN_RIM
+
+    furniture = default_layout().furniture_by_name()
+    rims = {name: max(rim_above(furniture[name], p) for p in furniture_geometry(furniture[name]).places)
+            for name in ("sink_bathroom", "sink_dining_room", "shower", "table_dining_room", "kitchen_counter_left")}
+    assert rims["sink_bathroom"] > BASIN_RIM and rims["sink_dining_room"] > BASIN_RIM
+    assert 0.0 < rims["shower"] < BASIN_RIM  # its curb
+    assert rims["table_dining_room"] == 0.0 and rims["kitchen_counter_left"] == 0.0
