@@ -183,10 +183,7 @@ class Replayer:
 
     def day(self, task: DayTask) -> Day:
         """Read and live day `task` into our dataset's Day (no DayKey: a replayed day is redone from its script)."""
-        record = self.live(self.read(task.path), task)
-        return Day(task.household, task.split, task.index, np.array(record.minutes, dtype=np.int32),
-                   np.array(record.parents, dtype=np.int16), np.array(record.relations, dtype=np.int8),
-                   tuple(record.schedule), tuple(record.moves))
+        return as_day(task, self.live(self.read(task.path), task))
 
     def run(self, task: DayTask) -> tuple[DayTask, Day | None, dict]:
         """(task, day or None, log record with the failure's reason if the day could not run)."""
@@ -202,12 +199,20 @@ class Replayer:
         return world_meta(self.world, households, extra)
 
 
+def as_day(task: DayTask, record: DayLog) -> Day:
+    """The lived day `record` of `task` as our dataset's Day."""
+    return Day(task.household, task.split, task.index, np.array(record.minutes, dtype=np.int32),
+               np.array(record.parents, dtype=np.int16), np.array(record.relations, dtype=np.int8),
+               tuple(record.schedule), tuple(record.moves))
+
+
 def replay_task(replayer: Replayer, task: DayTask) -> tuple[DayTask, Day | None, dict]:
     """One day of `replay` on a worker's Replayer: the task function of the execution backend."""
     return replayer.run(task)
 
 
-def _check_existing(out: Path, meta: DatasetMeta) -> None:
+def check_existing(out: Path, meta: DatasetMeta) -> None:
+    """Refuse `out` unless it is new, empty, or this same replay's dataset (to resume)."""
     path = out / "meta.json"
     if path.exists():
         existing = json.loads(path.read_text())
@@ -230,7 +235,7 @@ def replay(scripts: str | Path, out: str | Path, backend: Backend = IN_PROCESS, 
     probe = Replayer()
     meta = probe.meta([tasks[0].household], {"replay": {"scripts": str(Path(scripts).resolve()),
                                                         "homer_sim": __version__}})
-    _check_existing(out, meta)
+    check_existing(out, meta)
     write_meta(out, meta)
     todo = [t for t in tasks if not day_path(out, t.household, t.split, t.index).exists()]
     failed = {}

@@ -43,8 +43,18 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from homer_sim import __version__
+from homer_sim.data.dataset import Day, write_day, write_meta
 from homer_sim.data.homer_plus import Household, read_day, read_household, upstream_folder
-from homer_sim.data.replay import DayTask, Replayer, find_day_scripts, short_reason, start_layout
+from homer_sim.data.replay import (
+    DayTask,
+    Replayer,
+    as_day,
+    check_existing,
+    find_day_scripts,
+    short_reason,
+    start_layout,
+)
 from homer_sim.errors import HomerError
 from homer_sim.execution import IN_PROCESS, Backend
 from homer_sim.home.apartment import default_layout
@@ -74,6 +84,7 @@ class Tally:
     completed: int = 0
     causes: Counter = field(default_factory=Counter)
     failed: dict = field(default_factory=dict)
+    day: Day | None = None  # the day lived, when one day's tally (not summed by `add`)
 
     def add(self, other: Tally) -> None:
         """Count `other`'s days in too."""
@@ -190,6 +201,7 @@ class HouseholdCheck:
             tally.failed[task.label] = short_reason(error)
             return
         tally.completed += 1
+        tally.day = as_day(task, self.record)
         tally.causes.update(self.action_failures)
         tally.changes += len(seen)
         tally.seen += sum(ok for ok, _ in seen)
@@ -315,9 +327,11 @@ def check_task(check: HouseholdCheck, task: DayTask) -> Tally:
 
 
 def replay_check(household_dir: str | Path, progress: bool = False, days: int | None = None,
-                 backend: Backend = IN_PROCESS) -> dict:
+                 backend: Backend = IN_PROCESS, out: str | Path | None = None) -> dict:
     """Replay and check every day of an unpacked HOMER+ household folder (the first `days` of them, training days
-    first, when given), the days on `backend` (this process, local processes or Ray tasks).
+    first, when given), the days on `backend` (this process, local processes or Ray tasks). With `out`, each
+    completed day is also written there as a dataset of ours (from the authors' start arrangement, an action that
+    failed left out as the check leaves it), to score predictors on our physical replay.
 
     Returns {"days", "days_completed", "agreement" (share of movable object-steps whose parent agrees, None when
     no day completed), "graph_changes_seen" (share of graph change edge lines seen, None without any),
@@ -328,9 +342,17 @@ def replay_check(household_dir: str | Path, progress: bool = False, days: int | 
     check = HouseholdCheck(household_dir)
     tasks = find_day_scripts(check.root, check.root.name)[:days]
     total = Tally()
+    if out is not None:
+        out = Path(out)
+        meta = Replayer().meta([check.root.name], {"replay": {"scripts": str(check.root.resolve()),
+                                                              "homer_sim": __version__, "start": "authors'"}})
+        check_existing(out, meta)
+        write_meta(out, meta)
     with backend.run(check_task, tasks, HouseholdCheck, (str(Path(household_dir).resolve()),), check) as run:
         for tally in tqdm(run, total=len(tasks), desc="days", unit="day", disable=not progress):
             total.add(tally)
+            if out is not None and tally.day is not None:
+                write_day(out, tally.day)
 
     def share(part: int, whole: int) -> float | None:
         return round(part / whole, 4) if whole else None

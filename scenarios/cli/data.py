@@ -113,7 +113,8 @@ def cmd_replay(args: argparse.Namespace) -> int:
 def cmd_replay_check(args: argparse.Namespace) -> int:
     from homer_sim.data.replay_check import replay_check
 
-    result = replay_check(args.household, progress=not args.json, days=args.days, backend=backend_from_args(args))
+    result = replay_check(args.household, progress=not args.json, days=args.days, backend=backend_from_args(args),
+                          out=args.out)
 
     def share(x: float | None) -> str:
         return "n/a" if x is None else f"{x:.1%}"
@@ -199,6 +200,9 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     check.add_argument("household", type=Path, help="the unpacked HouseholdX folder")
     check.add_argument("--days", type=int, default=None,
                        help="check only the first N days (training days first, in number order)")
+    check.add_argument("--out", type=Path, default=None,
+                       help="also write the completed days here as a dataset (to score predictors on the replay "
+                       "with homer evaluate --data OUT); a new or empty folder, or one this check wrote")
     add_backend_arguments(check, "days")
     check.add_argument("--json", action="store_true",
                        help='print {"days", "days_completed", "agreement", "graph_changes_seen", "agreement_known", '

@@ -18,6 +18,7 @@ import torch
 from homer_sim.data.dataset import Dataset
 from homer_sim.data.replay import Replayer, find_day_scripts, replay, start_layout
 from homer_sim.data.replay_check import replay_check
+from homer_sim.errors import HomerError
 from homer_sim.graph import INSIDE, ON
 from homer_sim.home.apartment import default_layout
 from homer_sim.home.catalog import CATALOG
@@ -230,7 +231,7 @@ def test_replay_lives_the_day_at_its_minutes_and_keeps_switch_state(tmp_path: Pa
 @pytest.mark.physics
 def test_replay_check_counts_agreement_changes_and_causes(tmp_path: Path) -> None:
     folder = _household(tmp_path / "HouseholdT", 600)
-    result = replay_check(folder)
+    result = replay_check(folder, out=tmp_path / "replayed")
     # 109 authors' steps of one movable bowl: 06:00-08:00 in the cupboard and 08:10-09:50 on the table agree
     # (13 + 11); from 10:00 the authors put it back into the cupboard, ours stayed where the person set it down.
     # Change lines: the grab's '- bowl INSIDE cupboard', the put's '+ bowl ON table' and '+ bowl INSIDE
@@ -239,6 +240,15 @@ def test_replay_check_counts_agreement_changes_and_causes(tmp_path: Path) -> Non
                       "graph_changes_seen": round(3 / 4, 4), "agreement_known": round(24 / 109, 4),
                       "graph_changes_seen_known": round(3 / 4, 4),
                       "causes": {"settled elsewhere": 85, "change not seen (+)": 1}, "failed": {}}
+    # --out wrote the day lived as a dataset of ours: the bowl in the cupboard, then on the table
+    written = Dataset(tmp_path / "replayed")
+    day, nodes = written.load("HouseholdT", "train")[0], list(written.meta.nodes)
+    bowl = nodes.index("bowl")
+    assert (day.parent[day.minutes < 480, bowl] == nodes.index("cupboard")).all()
+    assert (day.parent[(day.minutes >= 490) & (day.minutes < 600), bowl] == nodes.index("table_dining_room")).all()
+    other = _household(tmp_path / "HouseholdU", 600)
+    with pytest.raises(HomerError, match="holds another dataset"):  # a folder of another replay is not mixed in
+        replay_check(other, out=tmp_path / "replayed")
 
 
 @pytest.mark.physics
