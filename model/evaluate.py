@@ -55,6 +55,9 @@ HEADLINE_WINDOW_MIN = DEFAULT_WINDOW_MIN
 CURVE_WINDOWS_MIN = tuple(range(10, 130, 10))
 MAX_UNUSED_WRONG_PCT = 1.0  # tuning keeps at least 99% of unused objects in place when any setting can
 MAX_ROBOT_WRONG_PCT = 10.0  # the assistance tuning keeps the robot's wrong moves to a tenth when any setting can
+MIN_ACT_STEPS = 2  # the robot's act_steps is at least this: a robot acting only on moves due within the next grid
+# step acts at the very tick the person starts (its minutes of work make them wait, which the replay does not see:
+# the table is set as breakfast starts, not before)
 CV_DAYS = 10  # cross-validated methods: training days held out in turn (all of them when there are fewer)
 TUNING_VERSION = 5  # bump when the tuning rule or a grid changes: cached tunings are then redone
 TARGETS = ("paper", "f1", "assist")  # what tunables are chosen for: the paper's objective, relocation F1, or
@@ -132,11 +135,11 @@ def tune_targets(predictor: Predictor, queries: Queries | Sequence[tuple[Predict
 def _tuning_scores(target: str, queries: Queries, predicted: np.ndarray, steps: int, movable: np.ndarray,
                    outside: int = -1) -> list[tuple[dict[str, float], tuple[bool, float]]]:
     """[(decision-rule params beside the threshold, (admissible, score))] of one setting's predictions; higher is
-    better. "assist" scores each `act_steps` 1 .. steps (`_robot_score`; `outside`: the index of that root node, -1
-    if none); the other targets act on the whole window (act_steps 0)."""
+    better. "assist" scores each `act_steps` MIN_ACT_STEPS .. steps (`_robot_score`; `outside`: the index of that
+    root node, -1 if none); the other targets act on the whole window (act_steps 0)."""
     if target == "assist":
         return [({"act_steps": float(k)}, _robot_score(queries, predicted, steps, movable, k, outside))
-                for k in range(1, steps + 1)]
+                for k in range(min(MIN_ACT_STEPS, steps), steps + 1)]
     if target == "f1":
         return [({"act_steps": 0.0}, (True, float(relocation_counts(queries, predicted, movable, steps).f1().mean())))]
     counts = score(queries, predicted, steps, movable)

@@ -1,6 +1,7 @@
 """Policies over the assisted-day environment (`scenarios.env`): observation in, relocations asked for out.
 
-`PsiPolicy` is the paper's robot: it rolls a predictor `window_min` ahead from the observed scene graph, turns
+`PsiPolicy` is the paper's robot: it rolls a predictor `window_min` ahead from the observed scene graph (with the
+help it holds for the person back where it came from), turns
 the first predicted changes into relocations with Psi (`scenarios.psi`), and remembers its own help (objects it
 placed stay for the person; help left unused goes back; a failed relocation waits a window, or, when the cause is
 in the object's own state (`scenarios.causes.LASTING`), until someone has moved the object). `OraclePredictor`
@@ -93,7 +94,9 @@ class PsiPolicy:
     """The paper's robot as a policy: predict, plan with Psi, remember the help it gave (see the module doc).
 
     threshold: the confidence a predicted move needs (default: the predictor's own, which
-    `scenarios.predictors.predictor_for` tunes on validation days for the assistance objective)."""
+    `scenarios.predictors.predictor_for` tunes on validation days for the assistance objective). The robot acts
+    on a move only when its first predicted step is within the predictor's `act_steps` (tuned with the threshold;
+    0 or absent: the whole window), and asks the predictor about the arrangement the person left (`_as_left`)."""
 
     def __init__(self, scene: SceneInfo, predictor, window_min: int = DEFAULT_WINDOW_MIN,
                  threshold: float | None = None, recording=None) -> None:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from homer_sim.data.dataset import Dataset, Day
-from model.evaluate import MAX_ROBOT_WRONG_PCT, rollout_queries, summarise, tune
+from model.evaluate import MAX_ROBOT_WRONG_PCT, MIN_ACT_STEPS, rollout_queries, summarise, tune
 from model.methods import make_predictor
 from model.metrics import Counts, Queries, day_queries, first_change, gate, robot_counts, score, window_steps
 from model.predictor import ModelError, Rollout
@@ -145,7 +145,7 @@ def test_tuning_for_assistance_picks_the_robots_best_rule_on_validation_days(tmp
     params, best = tune(predictor, queries, 3, target="assist")
     rollout = rollout_queries(predictor, queries, 3)
     every = {(t, k): robot_counts(queries, gate(rollout, queries.observed, t), 3, predictor.movable, k)
-             for t in predictor.grid["threshold"] for k in (1, 2, 3)}
+             for t in predictor.grid["threshold"] for k in range(MIN_ACT_STEPS, 4)}
     admissible = [c.assistance() for c in every.values() if c.wrong <= MAX_ROBOT_WRONG_PCT / 100 * c.relocations]
     chosen = every[params["threshold"], int(params["act_steps"])]
     assert best == chosen.assistance() == max(admissible or [c.assistance() for c in every.values()])

@@ -12,7 +12,7 @@ import pytest
 
 from homer_sim.data.dataset import Dataset
 from model import selection
-from model.evaluate import MAX_ROBOT_WRONG_PCT, household_split, rollout_queries
+from model.evaluate import MAX_ROBOT_WRONG_PCT, MIN_ACT_STEPS, household_split, rollout_queries
 from model.metrics import day_queries, gate, robot_counts, window_steps
 from model.predictor import ModelError
 from model.selection import best_method, default_method, format_validation, ranking, validation_table
@@ -89,9 +89,9 @@ def test_the_robots_predictor_is_the_tables_choice_tuned_for_assistance_on_valid
         return counts.wrong <= MAX_ROBOT_WRONG_PCT / 100 * counts.relocations, counts.assistance()
 
     grid = [dict(zip(predictor.grid, values, strict=True)) | {"act_steps": float(k)}
-            for values in itertools.product(*predictor.grid.values()) for k in range(1, steps + 1)]
+            for values in itertools.product(*predictor.grid.values()) for k in range(MIN_ACT_STEPS, steps + 1)]
     chosen = info["tunings"]["assist@30"]["params"]
-    assert 1 <= chosen["act_steps"] <= steps
+    assert MIN_ACT_STEPS <= chosen["act_steps"] <= steps
     every = [robot(p) for p in grid]
     admissible = [v for ok, v in every if ok] or [v for _, v in every]
     assert robot(chosen)[1] == max(admissible) == info["tunings"]["assist@30"]["val_score"]
