@@ -249,21 +249,34 @@ def robot_counts(queries: Queries, predicted: np.ndarray, window_steps: int, mov
     objects where they would be without the robot (as the robot queries it, `scenarios.policies.PsiPolicy`). A
     relocation is correct when the object's first true move within `window_steps` steps goes to its destination
     (`scenarios.scoring`). Nothing is taken to or from the root `outside` (its node index, -1 if none: the robot
-    stays in the apartment)."""
+    stays in the apartment), nor from or to where the person is: the days hold no positions, so the person is taken
+    to be at the places (old and new parents) of their latest moves, for `window_steps` steps after them (eating
+    at the table they laid, the robot may not clear it: `scenarios.psi.psi`'s in_use). Without this the replay
+    credits the predictor's surest moves, the person clearing up where they sit, which the robot never makes."""
     steps = np.minimum(queries.valid, window_steps)
     true_moved, true_dest = first_change(queries.observed, queries.future, steps)
     pred_moved, pred_dest = first_change(queries.observed, predicted, np.minimum(steps, act_steps))
-    pred_moved &= np.asarray(movable, dtype=bool)[None]
+    movable = np.asarray(movable, dtype=bool)
+    pred_moved &= movable[None]
     if outside >= 0:
         root = roots(queries.observed)
         pred_moved &= (root != outside) & (np.take_along_axis(root, np.maximum(pred_dest, 0), axis=1) != outside)
     starts = np.r_[True, np.diff(queries.minute) <= 0]
+    changed = np.zeros(queries.observed.shape, dtype=bool)  # (Q, N): moved since the previous query of the day
+    changed[1:] = (queries.observed[1:] != queries.observed[:-1]) & movable[None] & ~starts[1:, None]
     relocations = correct = put_back = 0
+    near: set[int] = set()  # the places of the person's latest moves (where they are taken to be)
+    latest = -window_steps - 1  # the query those moves were seen at
     held: dict[int, tuple[int, int]] = {}  # object -> (query it was moved at, where it came from)
     unwanted: dict[int, int] = {}  # object -> where its unused help went back to
     for i, observed in enumerate(queries.observed):
         if starts[i]:
             held, unwanted = {}, {}
+            near, latest = set(), i - window_steps - 1
+        if changed[i].any():
+            near = set(queries.observed[i - 1][changed[i]].tolist()) | set(observed[changed[i]].tolist())
+            latest = i
+        person_at = near if i - latest < window_steps else set()
         for o, (since, source) in list(held.items()):
             if observed[o] != source:  # the person moved it: the hold ends
                 del held[o]
@@ -274,7 +287,7 @@ def robot_counts(queries: Queries, predicted: np.ndarray, window_steps: int, mov
                 unwanted[o] = source
         unwanted = {o: p for o, p in unwanted.items() if observed[o] == p}
         for o in np.flatnonzero(pred_moved[i]):
-            if o in held or o in unwanted:
+            if o in held or o in unwanted or observed[o] in person_at or pred_dest[i, o] in person_at:
                 continue
             relocations += 1
             correct += int(true_moved[i, o] and true_dest[i, o] == pred_dest[i, o])
