@@ -171,3 +171,19 @@ def test_the_replayed_robot_acts_once_holds_its_help_and_puts_unused_help_back()
     never[0, 0, 2] = 1  # only at query 0, and the person never comes: moved, held, put back
     queries = Queries(np.zeros((6, 3), int), queries.minute, np.zeros((6, 3, 3), int), queries.valid)
     assert robot_counts(queries, never, 3, movable, 1) == type(counts)(2, 0, 1)
+
+
+def test_the_replayed_robot_keeps_away_from_where_the_person_just_moved_things() -> None:
+    # Node 3 moves from node 0 to node 1 (the person) just before query 1; node 2 is predicted to go 0 -> 1 at
+    # every query. The person is taken to be at nodes 0 and 1 for a window (3 steps): the robot first acts at 4.
+    observed = np.zeros((7, 4), dtype=int)
+    observed[1:, 3] = 1
+    future = np.stack([observed[np.minimum(np.arange(t + 1, t + 4), 6)] for t in range(7)])
+    queries = Queries(observed, np.arange(7, dtype=np.float32) * 10, future, np.minimum(3, 6 - np.arange(7)))
+    predicted = np.repeat(np.array([[0, 0, 1, 1]]), 3, axis=0)[None].repeat(7, axis=0)
+    predicted[0] = observed[0]  # nothing predicted at query 0
+    movable = np.array([False, False, True, True])
+    counts = robot_counts(queries, predicted, 3, movable, 3)
+    assert (counts.relocations, counts.put_back) == (1, 0)  # acted once, at query 4, and held to the day's end
+    predicted[:4] = observed[:4, None]  # the same robot with nothing predicted before query 4
+    assert robot_counts(queries, predicted, 3, movable, 3) == counts
