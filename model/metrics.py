@@ -119,11 +119,6 @@ class Counts:
         used = 100.0 * (self.used_correct - self.used_wrong) / self.used if self.used else 0.0
         return used - (100.0 * self.unused_wrong / self.unused if self.unused else 0.0)
 
-    def assistance(self) -> int:
-        """Fetches a robot acting on these predictions would have made ahead (used correct) minus its wrong moves
-        (used wrong and unused wrong): a count, since each wrong move costs the person about one fetch."""
-        return self.used_correct - self.used_wrong - self.unused_wrong
-
     def percentages(self) -> dict[str, dict[str, float]]:
         """{"used": {"correct", "wrong", "missed"}, "unused": {"correct", "wrong"}} in 0..100 (NaN if no objects)."""
         def pct(part: int, whole: int) -> float:

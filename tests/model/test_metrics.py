@@ -130,11 +130,6 @@ def test_window_must_be_a_positive_multiple_of_the_grid() -> None:
         window_steps(0, 10)
 
 
-def test_the_assistance_objective_counts_fetches_made_ahead_minus_wrong_moves() -> None:
-    counts = Counts(used_correct=7, used_wrong=2, used_missed=5, unused_correct=400, unused_wrong=3)
-    assert counts.assistance() == 7 - 2 - 3
-
-
 def test_tuning_for_assistance_picks_the_robots_best_rule_on_validation_days(tmp_path) -> None:
     write_synthetic_dataset(tmp_path, np.random.default_rng(4), households=1, train_days=8, test_days=1, size="small")
     dataset = Dataset(tmp_path)
