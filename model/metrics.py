@@ -119,11 +119,6 @@ class Counts:
         used = 100.0 * (self.used_correct - self.used_wrong) / self.used if self.used else 0.0
         return used - (100.0 * self.unused_wrong / self.unused if self.unused else 0.0)
 
-    def assistance(self) -> int:
-        """Fetches a robot acting on these predictions would have made ahead (used correct) minus its wrong moves
-        (used wrong and unused wrong): a count, since each wrong move costs the person about one fetch."""
-        return self.used_correct - self.used_wrong - self.unused_wrong
-
     def percentages(self) -> dict[str, dict[str, float]]:
         """{"used": {"correct", "wrong", "missed"}, "unused": {"correct", "wrong"}} in 0..100 (NaN if no objects)."""
         def pct(part: int, whole: int) -> float:
@@ -204,3 +199,92 @@ def window_steps(window_min: int, grid_min: int) -> int:
     if window_min <= 0 or window_min % grid_min:
         raise ModelError(f"window of {window_min} min; use a positive multiple of {grid_min} min (10, 20, ..., 120)")
     return window_min // grid_min
+
+
+@dataclass(frozen=True)
+class RobotCounts:
+    """What a robot acting on gated predictions does over validation days (`robot_counts`): relocations it makes
+    and of them the correct ones (the person's first move of the object within the window goes there: a fetch made
+    ahead); `put_back`, the unused help it takes back (counted among the relocations, never correct)."""
+
+    relocations: int = 0
+    correct: int = 0
+    put_back: int = 0
+
+    @property
+    def wrong(self) -> int:
+        return self.relocations - self.correct
+
+    def assistance(self) -> int:
+        """Fetches made ahead minus wrong moves (put-backs of unused help included)."""
+        return self.correct - self.wrong
+
+
+def roots(parent: np.ndarray) -> np.ndarray:
+    """The root (room, or `outside`) above each node of parent arrays of Shape (..., N) (roots have parent -1)."""
+    parent = np.asarray(parent)
+    root = np.broadcast_to(np.arange(parent.shape[-1]), parent.shape).copy()
+    while True:
+        up = np.take_along_axis(parent, root, axis=-1)
+        if (up < 0).all():
+            return root
+        root = np.where(up >= 0, up, root)
+
+
+def robot_counts(queries: Queries, predicted: np.ndarray, window_steps: int, movable: np.ndarray,
+                 act_steps: int, outside: int = -1) -> RobotCounts:
+    """Replay the assisted robot's decisions on queries of whole days in order (the grid steps of each day, a day
+    starting where the minute does not increase), against the days themselves (the person's moves as they were).
+
+    At each query the robot moves every movable object whose first predicted move (predicted: Shape (Q, K', N)
+    parents) comes within `act_steps` steps, to that destination, unless it holds the object: what it moved stays
+    `window_steps` steps for the person (a hold) and is released when the person moves it or the window has
+    passed; then, unused, it goes back to where it came from (a relocation, and a wrong one) and is not moved
+    again until the person moves it. The predictor is queried on the day's own arrangement, i.e. with held
+    objects where they would be without the robot (as the robot queries it, `scenarios.policies.PsiPolicy`). A
+    relocation is correct when the object's first true move within `window_steps` steps goes to its destination
+    (`scenarios.scoring`). Nothing is taken to or from the root `outside` (its node index, -1 if none: the robot
+    stays in the apartment), nor from or to where the person is: the days hold no positions, so the person is taken
+    to be at the places (old and new parents) of their latest moves, for `window_steps` steps after them (eating
+    at the table they laid, the robot may not clear it: `scenarios.psi.psi`'s in_use). Without this the replay
+    credits the predictor's surest moves, the person clearing up where they sit, which the robot never makes."""
+    steps = np.minimum(queries.valid, window_steps)
+    true_moved, true_dest = first_change(queries.observed, queries.future, steps)
+    pred_moved, pred_dest = first_change(queries.observed, predicted, np.minimum(steps, act_steps))
+    movable = np.asarray(movable, dtype=bool)
+    pred_moved &= movable[None]
+    if outside >= 0:
+        root = roots(queries.observed)
+        pred_moved &= (root != outside) & (np.take_along_axis(root, np.maximum(pred_dest, 0), axis=1) != outside)
+    starts = np.r_[True, np.diff(queries.minute) <= 0]
+    changed = np.zeros(queries.observed.shape, dtype=bool)  # (Q, N): moved since the previous query of the day
+    changed[1:] = (queries.observed[1:] != queries.observed[:-1]) & movable[None] & ~starts[1:, None]
+    relocations = correct = put_back = 0
+    near: set[int] = set()  # the places of the person's latest moves (where they are taken to be)
+    latest = -window_steps - 1  # the query those moves were seen at
+    held: dict[int, tuple[int, int]] = {}  # object -> (query it was moved at, where it came from)
+    unwanted: dict[int, int] = {}  # object -> where its unused help went back to
+    for i, observed in enumerate(queries.observed):
+        if starts[i]:
+            held, unwanted = {}, {}
+            near, latest = set(), i - window_steps - 1
+        if changed[i].any():
+            near = set(queries.observed[i - 1][changed[i]].tolist()) | set(observed[changed[i]].tolist())
+            latest = i
+        person_at = near if i - latest < window_steps else set()
+        for o, (since, source) in list(held.items()):
+            if observed[o] != source:  # the person moved it: the hold ends
+                del held[o]
+            elif i - since > window_steps:  # unused: back to its source
+                del held[o]
+                relocations += 1  # never correct: the person's next move is away from where it lies
+                put_back += 1
+                unwanted[o] = source
+        unwanted = {o: p for o, p in unwanted.items() if observed[o] == p}
+        for o in np.flatnonzero(pred_moved[i]):
+            if o in held or o in unwanted or observed[o] in person_at or pred_dest[i, o] in person_at:
+                continue
+            relocations += 1
+            correct += int(true_moved[i, o] and true_dest[i, o] == pred_dest[i, o])
+            held[int(o)] = (i, int(observed[o]))
+    return RobotCounts(relocations, correct, put_back)

@@ -92,7 +92,9 @@ class Predictor(ABC):
 
     params: current values of the tunable parameters; `threshold` is the decision rule (model.metrics.gate):
     0 predicts the per-node argmax (the paper); t > 0 predicts a move to the most likely other parent once its
-    probability reaches t (for t >= 0.5 that is the argmax, gated by its confidence).
+    probability reaches t (for t >= 0.5 that is the argmax, gated by its confidence). `act_steps` is the robot's
+    rule, not the metrics': it acts on a predicted move only when the move's first step is within that many grid
+    steps (0: the whole window); tuned for the assistance objective (model.evaluate).
     """
 
     method = "predictor"
@@ -103,7 +105,7 @@ class Predictor(ABC):
         self.meta = meta
         self.movable = meta.movable_mask
         self.candidates = candidate_mask(self.movable)
-        self.params: dict[str, float] = {"threshold": 0.0, **{k: v[0] for k, v in self.grid.items()}}
+        self.params: dict[str, float] = {"threshold": 0.0, "act_steps": 0.0, **{k: v[0] for k, v in self.grid.items()}}
         self.set_params(**params)
 
     @property

@@ -134,7 +134,8 @@ def assist_eval(spec: EvalSpec, households: Sequence[str] | None = None, days: i
         check_method(spec.method)
         for name in names:  # fit once here, not in every worker
             info = predictor_for(dataset, name, spec.method, spec.window_min, spec.checkpoint_folder(), progress)[1]
-            tuned[name] = thresholds(info, spec.window_min)
+            act = info["tunings"][f"{TUNINGS[-1]}@{spec.window_min}"]["params"].get("act_steps", 0.0)
+            tuned[name] = {**thresholds(info, spec.window_min), "act_steps": act}
     out = Path(out) if out else spec.checkpoint_folder() / f"assist_eval_{spec.method}_{spec.key()}"
     cached = _cached_days(out, spec)
     tasks = [(name, i) for name in names for i in range(_test_days(dataset, name, days))]
@@ -227,12 +228,15 @@ def markdown_table(summary: dict) -> str:
 
 
 def threshold_lines(tuned: dict[str, dict[str, float]]) -> list[str]:
-    """The thresholds per household: the robot's (tuned for the assistance objective) and the paper's."""
+    """The thresholds per household: the robot's (tuned for the assistance objective, with its act steps) and the
+    paper's."""
     if not tuned:
         return []
-    return ["", "thresholds tuned on validation days (the robot acts on the assistance one):", "",
-            "| household | assistance | paper |", "|---|---|---|",
-            *(f"| {h} | {t['assist']:.2f} | {t['paper']:.2f} |" for h, t in tuned.items())]
+    return ["", "thresholds tuned on validation days (the robot acts on the assistance one, on moves predicted at most",
+            "act steps of 10 min ahead):", "",
+            "| household | assistance | act steps | paper |", "|---|---|---|---|",
+            *(f"| {h} | {t['assist']:.2f} | {t.get('act_steps', 0):.0f} | {t['paper']:.2f} |"
+              for h, t in tuned.items())]
 
 
 def plot(summary: dict, path: Path) -> None:

@@ -1,6 +1,7 @@
 """Policies over the assisted-day environment (`scenarios.env`): observation in, relocations asked for out.
 
-`PsiPolicy` is the paper's robot: it rolls a predictor `window_min` ahead from the observed scene graph, turns
+`PsiPolicy` is the paper's robot: it rolls a predictor `window_min` ahead from the observed scene graph (with the
+help it holds for the person back where it came from), turns
 the first predicted changes into relocations with Psi (`scenarios.psi`), and remembers its own help (objects it
 placed stay for the person; help left unused goes back; a failed relocation waits a window, or, when the cause is
 in the object's own state (`scenarios.causes.LASTING`), until someone has moved the object). `OraclePredictor`
@@ -93,7 +94,9 @@ class PsiPolicy:
     """The paper's robot as a policy: predict, plan with Psi, remember the help it gave (see the module doc).
 
     threshold: the confidence a predicted move needs (default: the predictor's own, which
-    `scenarios.predictors.predictor_for` tunes on validation days for the assistance objective)."""
+    `scenarios.predictors.predictor_for` tunes on validation days for the assistance objective). The robot acts
+    on a move only when its first predicted step is within the predictor's `act_steps` (tuned with the threshold;
+    0 or absent: the whole window), and asks the predictor about the arrangement the person left (`_as_left`)."""
 
     def __init__(self, scene: SceneInfo, predictor, window_min: int = DEFAULT_WINDOW_MIN,
                  threshold: float | None = None, recording=None) -> None:
@@ -102,6 +105,8 @@ class PsiPolicy:
         self.window_min = window_min
         self.window_steps = window_min // GRID_MIN
         self.threshold = float(predictor.params["threshold"]) if threshold is None else float(threshold)
+        act = int(predictor.params.get("act_steps", 0))  # acts on moves predicted this many steps ahead (0: all)
+        self.act_steps = min(act, self.window_steps) if act > 0 else self.window_steps
         self.recording = recording
         self.reset()
 
@@ -140,16 +145,26 @@ class PsiPolicy:
         released = self.holds.update(graph, minute, used=carried, grabbed_at=grabbed_at)
         self.returns.update({r.obj: r for r in unused_help(released, graph, carried, grabbed_at)})
         self.returns = {o: r for o, r in self.returns.items() if graph.parent_of(o) == r.source and o not in carried}
-        rollout = self.predictor.rollout(graph.parent[None].astype(np.int64), np.array([minute], dtype=np.float32),
+        rollout = self.predictor.rollout(self._as_left(graph)[None], np.array([minute], dtype=np.float32),
                                          self.window_steps)
         self._log_prediction(graph, rollout, minute)
         open_now = {self.scene.articulations[i].split("/")[0] for i in np.flatnonzero(obs["openness"] > 0.1)}
         x, y = obs["person_position"]
-        return psi(graph, self.predictor.movable, rollout, threshold=self.threshold, window_steps=self.window_steps,
+        return psi(graph, self.predictor.movable, rollout, threshold=self.threshold, window_steps=self.act_steps,
                    containers=self.scene.containers, carried=carried,
                    excluded=lambda obj: self._excluded(obj, minute, graph), holds=self.holds, already_open=open_now,
                    in_use=furniture_near(self.scene.layout, float(x), float(y)),
                    returns=tuple(self.returns.values()))
+
+    def _as_left(self, graph: SceneGraph) -> np.ndarray:
+        """The parents the predictor is asked about: the observed ones with the objects the robot holds for the
+        person back where it took them from (the arrangement the person left; the predictor learned from days
+        without a robot, and the help laid out would read as the activity already under way)."""
+        parent = graph.parent.astype(np.int64)
+        for hold in self.holds.active.values():
+            if hold.source:
+                parent[graph.index(hold.obj)] = graph.index(hold.source)
+        return parent
 
     def _learn(self, outcomes: np.ndarray, graph: SceneGraph) -> None:
         """Remember what the robot did with the relocations asked for at the previous tick (`graph`: now)."""

@@ -26,7 +26,8 @@ def predictor_for(dataset, household: str, method: str | None, window_min: int, 
     validation days at `window_min`, cached under `checkpoints` as `homer evaluate` caches
     it (fitted on the first call, loaded after), with its checkpoint info. method None: the best validated method
     of the validation table (`model.selection`). Tuned for the paper's objective (reported) and then for the
-    assistance objective, whose threshold the predictor keeps: the robot's (see `thresholds`)."""
+    assistance objective (the robot's own loop replayed on the validation days, `model.metrics.robot_counts`),
+    whose threshold and act_steps the predictor keeps: the robot's (see `thresholds`)."""
     from model.evaluate import FitSpec, fit_task, household_split, run_fit
     from model.selection import default_method
 

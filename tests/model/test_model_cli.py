@@ -60,7 +60,7 @@ def test_train_writes_a_checkpoint_and_refuses_to_overwrite(data: Path, tmp_path
             "--quiet", "--json"]
     result = _run(argv, capsys)
     assert out.is_file() and result["method"] == "markov" and result["fit_days"] == 4 and result["val_days"] == 1
-    assert set(result["params"]) == {"threshold", "sigma_min", "stay_prior"}
+    assert set(result["params"]) == {"threshold", "act_steps", "sigma_min", "stay_prior"}
     args = _parser().parse_args(argv)
     with pytest.raises(Exception, match="--overwrite"):
         args.func(args)

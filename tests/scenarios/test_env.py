@@ -105,10 +105,12 @@ def test_psi_earns_more_than_a_random_or_an_empty_policy(setup: Setup) -> None:
     print(f"returns on the breakfast morning to 07:20: psi {psi_return}, random {random_return}, empty 0")
     assert psi_return >= 3 and psi_return > random_return
     assert psi_result["relocations_done"] == psi_result["relocations_correct"] >= 3
-    # What the robot set out is seen on the table at 06:50, and its outcomes came back in the observation.
-    at_650 = next(t for t in steps if t.observation["minute"] == 410).observation
-    assert all(env.scene.nodes[at_650["parent"][env.scene.index[o]]] == "table_dining_room"
-               for o in ("bowl", "milk", "food_cereal"))
+    # What the robot set out is seen on the table at the last tick before breakfast starts, and its outcomes came
+    # back in the observation.
+    (_, start, _), = env.task.day.entries
+    before = max((t for t in steps if t.observation["minute"] <= start), key=lambda t: t.observation["minute"])
+    assert all(env.scene.nodes[before.observation["parent"][env.scene.index[o]]] == "table_dining_room"
+               for o in ("bowl", "milk", "food_cereal")), before.observation["minute"]
     reported = np.concatenate([t.observation["outcomes"] for t in steps])
     assert (reported[:, 0] != NO_RELOCATION).sum() == psi_result["relocations_planned"]
 
