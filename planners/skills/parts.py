@@ -228,6 +228,8 @@ def parts_to_place(world, spots: Spots, parts, node: str) -> list[str]:
     every door where it is used inside (a door covers every shelf behind it), a drawer where one of those
     places is in it; none where it is used on its top (three drawers opened in front of a dresser whose top
     took the socks)."""
+    if not parts:  # a room, an object, furniture with nothing that opens
+        return []
     used = [place for _, place in spots.places_of(node, None)]
     drawers = {f"{node}/{place.part}" for place in used if place.part is not None}
     behind_doors = any(place.part is None and place.relation == INSIDE for place in used)
