@@ -108,23 +108,28 @@ def start_layout(layout: Layout, parents: Mapping[str, str]) -> tuple[Layout, tu
         if decl is None or decl.parent == parent:
             continue
         if parent in furniture:
-            relations = {p.relation for p in furniture_geometry(furniture[parent]).places}
-            moved = replace(decl, parent=parent, relation=INSIDE if INSIDE in relations else ON, level=None, at=None)
+            places = furniture_geometry(furniture[parent]).places
+            relation = INSIDE if any(p.relation == INSIDE for p in places) else ON
+            # any place, else each in turn: the first free one may be where an object declared there must go
+            levels = [None, *(k for k, p in enumerate(places) if p.relation == relation)]
+            options = [replace(decl, parent=parent, relation=relation, level=k, at=None) for k in levels]
         elif parent in objects and CATALOG[objects[parent].cls].supports and name not in _below(objects, parent):
-            moved = replace(decl, parent=parent, relation=ON, level=None, at=None)
+            options = [replace(decl, parent=parent, relation=ON, level=None, at=None)]
         elif parent in rooms and (at := _floor_spot(layout, decl, rooms[parent], objects)) is not None:
-            moved = replace(decl, parent=parent, relation=INSIDE, level=None, at=at)
+            options = [replace(decl, parent=parent, relation=INSIDE, level=None, at=at)]
+        else:
+            options = []
+        for moved in options:
+            trial = {**objects, name: moved}
+            candidate = replace(layout, objects=tuple(trial.values()))
+            try:
+                start_poses(candidate)
+            except LayoutError:
+                continue
+            objects, layout = trial, candidate
+            break
         else:
             left.append(name)
-            continue
-        trial = {**objects, name: moved}
-        candidate = replace(layout, objects=tuple(trial.values()))
-        try:
-            start_poses(candidate)
-        except LayoutError:
-            left.append(name)
-            continue
-        objects, layout = trial, candidate
     return layout, tuple(left)
 
 

@@ -300,6 +300,10 @@ def test_start_layout_moves_objects_to_the_parents_given_where_they_can_stand() 
     assert left == () and gap >= (CATALOG["toothbrush"].size[1] + CATALOG["tooth_paste"].size[1]) / 2
     assert all(np.linalg.norm(poses[name] - poses["toothbrush_holder"]) <= CATALOG["toothbrush_holder"].size[1] / 2
                for name in ("toothbrush", "tooth_paste"))
+    # into drawers: when the first free one is where an object declared in that drawer must go (the pencil in the
+    # filing cabinet's top drawer), the moved ones go into another (household A starts the headset and notebook there)
+    filed, left = start_layout(layout, {"headset": "filing_cabinet", "notebook": "filing_cabinet"})
+    assert left == () and {o.name for o in filed.objects if o.parent == "filing_cabinet"} >= {"headset", "notebook"}
 
 
 def test_replay_reports_a_day_that_cannot_run_and_goes_on(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
