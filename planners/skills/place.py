@@ -207,9 +207,10 @@ class Place:
                     ) -> SkillResult:
         """With the held `name` lowered for `target` (m, its spot on `node`; the grip site at `release`, m, at
         `quat`): let go and retreat, unless its lowest point stopped more than STOPPED_ABOVE m above where its bottom
-        goes (it came down on something) or, for a thing with an up, its centre is more than SPOT_MISS m beside
-        the spot (the arm fell short; cloth hangs off centre and lies as it lands): then back up APPROACH m, still
-        holding it. Where it stopped at most
+        goes (it came down on something) or, for a thing with an up put on furniture, its centre is more than
+        SPOT_MISS m beside the spot (the arm fell short; cloth hangs off centre and lies as it lands, a floor has
+        no edge to tip over: a vacuum cleaner held by its handle came down 5.1 cm beside its spot): then back up
+        APPROACH m, still holding it. Where it stopped at most
         DROP_HEIGHT m above touching nothing but the robot (the arm reaches no lower: a vacuum cleaner held by its
         handle 2.6-4 cm above the floor), it is let go there."""
         index = self.world.object_index(name)
@@ -221,7 +222,8 @@ class Place:
             self.arm.grip_line(release + np.array([0.0, 0.0, APPROACH]), quat)
             return SkillResult(False, f"place: {name} stopped {stopped * 100:.1f} cm above its spot on {node}")
         missed = float(np.linalg.norm(self.world.object_pose(name)[0][:2] - target[:2]))
-        if missed > SPOT_MISS and CATALOG[self.world.layout.objects[index].cls].family not in NO_UP_FAMILIES:
+        if (missed > SPOT_MISS and node in self.navigator.furniture
+                and CATALOG[self.world.layout.objects[index].cls].family not in NO_UP_FAMILIES):
             self.arm.grip_line(release + np.array([0.0, 0.0, APPROACH]), quat)
             return SkillResult(False, f"place: {name} came down {missed * 100:.1f} cm beside its spot on {node}")
         opening = max(TOP_RELEASE_OPENING, self._held_opening() + RELEASE_OPENING)
