@@ -162,19 +162,6 @@ TABLES = """breakfast (08:00 - 10:00)
 """
 
 
-@pytest.mark.physics
-def test_replay_check_tells_the_authors_tables_apart_by_id(tmp_path: Path) -> None:
-    # Their tables 114 and 270 are our dining-room and home-office ones (aliases.json): the bowl goes cupboard ->
-    # 114 at 08:02 -> 270 at 09:55, ours the same, so every step agrees; the last block's '- bowl ON table' is
-    # the table it left (114), not the one the action names, and is seen too.
-    nodes = [("home", 1, "Home", 0), ("dining_room", 41, "Rooms", 0), ("home_office", 241, "Rooms", 0),
-             ("table", 114, "Furniture", 1), ("table", 270, "Furniture", 2), ("cupboard", 117, "Furniture", 1),
-             ("bowl", 1026, "placable_objects", 5)]
-    result = replay_check(_write_household(tmp_path / "HouseholdT", TABLES, nodes, [(490, 3), (600, 4)]))
-    assert result == {"days": 1, "days_completed": 1, "agreement": 1.0, "graph_changes_seen": 1.0,
-                      "agreement_known": 1.0, "graph_changes_seen_known": 1.0, "causes": {}, "failed": {}}
-
-
 FLOOR = """breakfast (08:00 - 10:00)
 
 ### breakfast-00.txt
@@ -197,14 +184,25 @@ FLOOR = """breakfast (08:00 - 10:00)
 """
 
 
+# Their tables 114 and 270 are our dining-room and home-office ones (aliases.json): the bowl goes cupboard -> 114 at
+# 08:02 -> 270 at 09:55, ours the same, so every step agrees; the last block's '- bowl ON table' is the table it left
+# (114), not the one the action names, and is seen too.
+TABLE_NODES = [("home", 1, "Home", 0), ("dining_room", 41, "Rooms", 0), ("home_office", 241, "Rooms", 0),
+               ("table", 114, "Furniture", 1), ("table", 270, "Furniture", 2), ("cupboard", 117, "Furniture", 1),
+               ("bowl", 1026, "placable_objects", 5)]
+# VirtualHome hangs what lies on a floor from the room by ON: the bowl goes onto the dining-room floor at 08:02, then
+# onto the table in the same room at 09:55; '- bowl ON dining_room' says it left the floor (it is still INSIDE the
+# room), so ours on the table shows it.
+FLOOR_NODES = [("home", 1, "Home", 0), ("dining_room", 41, "Rooms", 0), ("table", 114, "Furniture", 1),
+               ("cupboard", 117, "Furniture", 1), ("bowl", 1026, "placable_objects", 3)]
+
+
 @pytest.mark.physics
-def test_replay_check_reads_on_a_room_as_on_its_floor(tmp_path: Path) -> None:
-    # VirtualHome hangs what lies on a floor from the room by ON: the bowl goes onto the dining-room floor at
-    # 08:02, then onto the table in the same room at 09:55; '- bowl ON dining_room' says it left the floor (it
-    # is still INSIDE the room), so ours on the table shows it. Every step and line agrees.
-    nodes = [("home", 1, "Home", 0), ("dining_room", 41, "Rooms", 0), ("table", 114, "Furniture", 1),
-             ("cupboard", 117, "Furniture", 1), ("bowl", 1026, "placable_objects", 3)]
-    result = replay_check(_write_household(tmp_path / "HouseholdT", FLOOR, nodes, [(490, 1), (600, 2)]))
+@pytest.mark.parametrize(("script", "nodes", "steps"), [(TABLES, TABLE_NODES, [(490, 3), (600, 4)]),
+                                                          (FLOOR, FLOOR_NODES, [(490, 1), (600, 2)])],
+                         ids=["tables told apart by id", "on a room is on its floor"])
+def test_replay_check_agrees_on_every_step_and_line(tmp_path: Path, script: str, nodes: list, steps: list) -> None:
+    result = replay_check(_write_household(tmp_path / "HouseholdT", script, nodes, steps))
     assert result == {"days": 1, "days_completed": 1, "agreement": 1.0, "graph_changes_seen": 1.0,
                       "agreement_known": 1.0, "graph_changes_seen_known": 1.0, "causes": {}, "failed": {}}
 
