@@ -23,7 +23,7 @@ from homer_sim.errors import HomerError
 from homer_sim.person.activities import script_files
 from homer_sim.person.aliases import Resolver
 from homer_sim.person.avatar import add_avatar
-from homer_sim.person.day_scripts import _NUMBER_TAG, _entry
+from homer_sim.person.day_scripts import NUMBER_TAG, schedule_entry
 from homer_sim.person.executor import ActionError, Executor
 from homer_sim.person.scripts import Script, ScriptError, parse_script
 from homer_sim.world import World
@@ -110,7 +110,7 @@ def _day_blocks(path: Path) -> list[tuple[str, str, float, list[str]]]:
     durations, blocks = [], []
     for raw in path.read_text(encoding="utf-8-sig").splitlines():
         text = raw.strip()
-        entry = _entry(text)
+        entry = schedule_entry(text)
         block = _BLOCK.match(text)
         if entry is not None and not blocks:
             durations.append(entry[2] - entry[1])
@@ -119,7 +119,7 @@ def _day_blocks(path: Path) -> list[tuple[str, str, float, list[str]]]:
                 raise HomerError(f"{path}: block {text!r} has no entry in the day's header")
             blocks.append((block.group(1), block.group(2), durations[len(blocks)], []))
         elif text.startswith("[") and blocks:
-            blocks[-1][3].append(_NUMBER_TAG.sub("", text))
+            blocks[-1][3].append(NUMBER_TAG.sub("", text))
     return blocks
 
 

@@ -68,11 +68,12 @@ class DayScript:
 _ENTRY = re.compile(r"^([A-Za-z_]+)\s*\(\s*(\d+):(\d+)\s*-\s*(1day\s*-\s*)?(\d+):(\d+)\s*\)$")
 _MINUTE = re.compile(r"^\d+(?:\.\d*)?$")
 _NOTE = re.compile(r"^\d+(?:\.\d*)?:\s")
-_NUMBER_TAG = re.compile(r"\s*\[\d+\]$")
+NUMBER_TAG = re.compile(r"\s*\[\d+\]$")  # an action's number at the end of its line, "[12]"
 _EDGE = re.compile(r"^([+-])\s+(\S+)\s+([A-Z_]+)\s+(\S+)$")
 
 
-def _entry(text: str) -> tuple[str, float, float] | None:
+def schedule_entry(text: str) -> tuple[str, float, float] | None:
+    """(activity, start minute, end minute) of a header line "name (HH:MM - HH:MM)", or None for another line."""
     match = _ENTRY.match(text)
     if match is None:
         return None
@@ -107,8 +108,8 @@ class _Reader:
             self.in_changes = bool(self.actions)
         elif self.in_changes:
             self._change(number, text)
-        elif self.activity is None and _entry(text) is not None:
-            self.schedule.append(_entry(text))
+        elif self.activity is None and schedule_entry(text) is not None:
+            self.schedule.append(schedule_entry(text))
         else:
             self.errors.append((number, f"cannot read {text!r}; expected a header entry, '### <activity>-<n>.txt', "
                                         "an action, its minute, '<<Graph Changes>>' or a '##' comment"))
@@ -116,7 +117,7 @@ class _Reader:
     def _action(self, number: int, text: str) -> None:
         if self.activity is None:
             self.errors.append((number, "action before the first '### <activity>-<n>.txt' line"))
-        self.waiting = (number, parse_action(_NUMBER_TAG.sub("", text), number, self.resolve, self.errors))
+        self.waiting = (number, parse_action(NUMBER_TAG.sub("", text), number, self.resolve, self.errors))
 
     def _minute(self, number: int, text: str) -> None:
         line, action = self.waiting
