@@ -60,6 +60,8 @@ class SceneGraphObserver:
         self.movable = np.array([index[n] for n in world.object_names], dtype=np.int32)
         self.movable_bodies = world.object_body_ids
         self.half_extents = np.array([np.array(CATALOG[o.cls].size) / 2 for o in world.layout.objects])
+        colliding = (model.geom_contype != 0) | (model.geom_conaffinity != 0)
+        self.object_geoms = [np.flatnonzero((model.geom_bodyid == b) & colliding) for b in self.movable_bodies]
         holds_inside = {i for i, o in zip(self.movable, world.layout.objects, strict=True)
                         if CATALOG[o.cls].family in CONTAINER_FAMILIES}
         self.holds_inside = np.array([i in holds_inside for i in range(len(self.nodes))])
@@ -151,15 +153,16 @@ class SceneGraphObserver:
         data = self.world.data
         center = data.xpos[body]
         half_world = np.abs(data.xmat[body].reshape(3, 3)) @ self.half_extents[k]
-        bottom = center[2] - half_world[2]
-        candidates = [(z, node) for node, z in contacts]
+        bottom = max(center[2] - half_world[2], self._lowest(k))  # a tilted box bound reaches far below a bowl's rim
+        top = bottom + min(SUPPORT_TOL, 0.3 * half_world[2])
+        found = [(z, node) for node, z in contacts]  # none while its tree sleeps: MuJoCo skips sleeping contacts
         for dx, dy in _RAY_OFFSETS:  # rays start just above the bottom: what lies in a cavity is not support
             start = np.array([center[0] + dx * half_world[0], center[1] + dy * half_world[1], bottom + RAY_LIFT])
-            hit = self._ray(start, body, _RAY_GROUPS)
-            if hit is not None and self.geom_node[hit[0]] >= 0:
-                candidates.append((start[2] - hit[1], int(self.geom_node[hit[0]])))
-        top = bottom + min(SUPPORT_TOL, 0.3 * half_world[2])
-        candidates = [(z, node) for z, node in candidates if bottom - SUPPORT_TOL <= z <= top]
+            found += self._support_below(start, body)
+        candidates = [(z, node) for z, node in found if bottom - SUPPORT_TOL <= z <= top]
+        if not candidates:  # the rays began inside what it rests on (a rim sunk into the floor): look from the centre
+            candidates = [(z, node) for z, node in self._support_below(center, body)
+                          if bottom - SUPPORT_TOL <= z <= top]
         support = max(candidates)[1] if candidates else -1
         if support >= 0 and self.supports[support]:  # a plate, a bowl, a bin: what holds objects
             return support, INSIDE if self.holds_inside[support] else ON
@@ -173,6 +176,24 @@ class SceneGraphObserver:
         if support >= 0:
             return support, INSIDE
         return -1, NONE
+
+    def _support_below(self, start: np.ndarray, body: int) -> list[tuple[float, int]]:
+        """[(height m, node)] of the first named geom straight below `start` other than `body`'s, if any."""
+        hit = self._ray(start, body, _RAY_GROUPS)
+        if hit is None or self.geom_node[hit[0]] < 0:
+            return []
+        return [(float(start[2] - hit[1]), int(self.geom_node[hit[0]]))]
+
+    def _lowest(self, k: int) -> float:
+        """The height (m) of movable k's lowest point: the lowest corner of its colliding geoms' bounding boxes."""
+        geoms, data = self.object_geoms[k], self.world.data
+        rows = data.geom_xmat[geoms].reshape(-1, 3, 3)[:, 2]  # each geom's local axes' world heights
+        aabb = self.world.model.geom_aabb[geoms]  # (G, 6): box centre and half sizes in the geom's frame
+        if not len(geoms):
+            return -np.inf
+        low = (data.geom_xpos[geoms, 2] + np.einsum("gj,gj->g", rows, aabb[:, :3])
+               - np.einsum("gj,gj->g", np.abs(rows), aabb[:, 3:]))
+        return float(low.min())
 
     def _object_container(self, k: int, point: np.ndarray) -> int:
         """The container object (bin or pot) whose cavity holds `point`, other than movable k itself, or -1."""
