@@ -129,7 +129,7 @@ class PsiPolicy:
         if minute < obs["robot_busy_until"]:
             return action_of(self.scene, ())
         plan = self.plan(obs)
-        if plan.relocations:
+        if plan.relocations or plan.skipped:  # kept for the day's report: what was asked, and what was left out why
             self.plans.append((minute, plan))
         asked = plan.relocations[: self.scene.action_shape[0]]
         self._asked = {r.obj: r for r in asked}
