@@ -6,8 +6,8 @@ out of the person's way. The physics seconds it spends pass on the routine clock
 until the robot is done (they take turns). The robot does not drive into the person (`Navigator.others`); a
 relocation that only the person stood in the way of, the robot not holding its object, waits and is tried again at
 the next snapshot the robot acts at. Every other relocation ends done (the object observed on its destination)
-or not, with the skill's reason; objects the robot displaced more than COLLATERAL_M that no relocation named are
-kept as collateral.
+or not, with the skill's reason; one whose object a later step of the same turn moved more than COLLATERAL_M is not
+done after all; objects the robot displaced more than COLLATERAL_M that no relocation named are kept as collateral.
 """
 
 from __future__ import annotations
@@ -91,6 +91,7 @@ class Helper:
         self.containers = containers_of(world)
         self.log = AssistLog()
         self.waiting: list[Relocation] = []  # relocations the person stood in the way of, for the next snapshot
+        self._placed_at: dict[str, np.ndarray] = {}  # where this turn's done relocations left their objects (m)
         executor.dynamic_obstacles = self.robot_cells
         self.robot.navigator.others = self.person_rects
 
@@ -112,10 +113,11 @@ class Helper:
         steps = self._needed(plan_steps(graph, movable, relocations, self.containers, self.open_containers()),
                              relocations, graph, movable)
         before = self.world.object_positions()
-        started = float(self.world.data.time)
+        started, first = float(self.world.data.time), len(self.log.relocations)
         self._carry_out(steps, relocations, minute, started)
         self._park()
         self._collateral(before, {r.obj for r in relocations}, minute)
+        self._knocked_off(first)
         spent = (float(self.world.data.time) - started) / 60.0
         self.log.robot_minutes += spent
         self.event(f"robot done after {spent:.1f} min", minute + spent)
@@ -244,6 +246,24 @@ class Helper:
             return
         ended = graph.parent_of(relocation.obj) or ""
         self.log.relocations.append(RelocationOutcome(minute, relocation, done, reason, ended))
+        if done:
+            self._placed_at[relocation.obj] = self.world.object_pose(relocation.obj)[0].copy()
+
+    def _knocked_off(self, first: int) -> None:
+        """Relocations from `first` on (this turn's) that were done, but whose object a later step of the turn moved
+        more than COLLATERAL_M (a spoon set down beside the bowl knocked it off the table), are not done."""
+        graph = self.robot.observer.update()
+        for k in range(first, len(self.log.relocations)):
+            o = self.log.relocations[k]
+            placed = self._placed_at.pop(o.relocation.obj, None)
+            if not o.done or placed is None:
+                continue
+            moved = float(np.linalg.norm(self.world.object_pose(o.relocation.obj)[0] - placed))
+            if moved > COLLATERAL_M:
+                now = graph.parent_of(o.relocation.obj) or ""
+                reason = f"knocked off {o.ended_on} later in the robot's turn ({moved * 100:.0f} cm, now on {now})"
+                self.log.relocations[k] = RelocationOutcome(o.minute, o.relocation, False, reason, now)
+                self.event(f"robot knocked {o.relocation.obj} off {o.ended_on}", o.minute, "WARN")
 
     def _park(self) -> None:
         """Back to the parking pose with the arm tucked, out of the person's way."""

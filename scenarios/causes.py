@@ -22,6 +22,7 @@ CAUSE_PATTERNS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("no grasp fits", ("no grasp fits",)),
     ("every grasp failed", ("every grasp",)),
     ("the person in the way", ("someone is in the way",)),
+    ("knocked off later", ("knocked off",)),
 )
 LASTING = ("lies fallen over",)
 """Causes in the object's own state where it lies: trying again before someone has moved it fails the same way."""

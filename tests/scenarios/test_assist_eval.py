@@ -75,6 +75,7 @@ def test_failure_reasons_are_grouped_by_cause() -> None:
         "place: no free base pose puts drinking_glass into dishwasher without it or the arm": "no free base pose",
         "cupboard did not open (open cupboard/left: openness 0.42, below 0.9)": "container did not open",
         "place: fork fell over on sink_dining_room": "fell over on the destination",
+        "knocked off table_dining_room later in the robot's turn (75 cm, now on dining_room)": "knocked off later",
         "something new": OTHER,
     }
     assert {reason: cause_of(reason) for reason in reasons} == reasons
@@ -97,3 +98,30 @@ def test_totals_add_days_up_and_take_the_median_wall_time() -> None:
     assert summary["total"]["fetch_share"] == 0.12 and summary["total"]["wall_s_per_day"] == 30.0
     assert summary["failures"] == {"no path": 2}
     assert "| a | 2 | 6 | 5 | 4 | 1 |" in markdown_table(summary)
+
+
+def test_a_relocation_knocked_off_later_in_the_turn_is_not_done(world) -> None:
+    """The spoon set down beyond the bowl knocked the bowl off the table: the bowl's relocation, done when it was
+    placed, is not done at the end of the robot's turn."""
+    from types import SimpleNamespace
+
+    from homer_sim.observe import SceneGraphObserver
+    from scenarios.assist import AssistLog, Helper, RelocationOutcome
+    from scenarios.psi import Relocation
+
+    helper = Helper.__new__(Helper)  # the turn's bookkeeping only: no robot or person needed
+    helper.world, helper.recording, helper.log = world, None, AssistLog()
+    helper.robot = SimpleNamespace(observer=SceneGraphObserver(world))
+    bowl, kept = Relocation("bowl", "cupboard", "table_dining_room", 1, 0.9), Relocation("milk", "fridge",
+                                                                                         "table_dining_room", 1, 0.9)
+    world.set_object_pose("bowl", (2.6, 2.2, 0.8))
+    world.set_object_pose("milk", (2.3, 2.0, 0.86))
+    world.settle(3.0)
+    helper._placed_at = {r.obj: world.object_pose(r.obj)[0].copy() for r in (bowl, kept)}
+    helper.log.relocations = [RelocationOutcome(360, r, True, "", "table_dining_room") for r in (bowl, kept)]
+    world.set_object_pose("bowl", (2.8, 2.8, 0.1))  # onto the floor under the table
+    world.settle(3.0)
+    helper._knocked_off(0)
+    knocked, still = helper.log.relocations
+    assert not knocked.done and cause_of(knocked.reason) == "knocked off later" and knocked.ended_on == "dining_room"
+    assert still.done and still.ended_on == "table_dining_room"
