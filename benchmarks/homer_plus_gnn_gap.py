@@ -4,7 +4,7 @@ test days under each difference between this project's protocol and the SLaTe-PR
 
 - decision rule: the threshold tuned for F1 on validation days (`tuned`), or the per-node argmax of each step
   (`argmax`, threshold 0, what the SLaTe-PRO code takes);
-- what a step compares: the object's parent at t + s (`state`, the definition in ../shared/homer_plus/SOURCE.md
+- what a step compares: the object's parent at t + s (`state`, the definition HOMER+ publishes with its data
   and model/metrics.py), or its first change within (t, t + s] (`first_change`: what the SLaTe-PRO code's
   `evaluate_prediction` keeps in `dest_pred` / `dest_gt`, sticky once an object is predicted or seen to move);
 - queries: every step but each day's last (`ours`, lookahead cut at the day's end), or steps 1 .. T - 7 only

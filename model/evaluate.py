@@ -350,7 +350,7 @@ def evaluate(data: str | Path, methods: Sequence[str], window_min: int = HEADLIN
              checkpoints: str | Path | None = None, households: Sequence[str] | None = None,
              train_days: int | None = None, progress: bool = True, metric: str = "paper",
              backend: Backend = IN_PROCESS) -> dict:
-    """The `homer evaluate` result: per method, scores averaged over households (see DESIGN.md).
+    """The `homer evaluate` result: per method, scores averaged over households.
 
     metric "paper" (the paper's table at `window_min`), "f1" (SLaTe-PRO's relocation F1, 10 .. 60 minutes) or
     "both"; each is scored with the tunables chosen on validation days for that metric. Keys: "methods"[name] (means

@@ -1,4 +1,4 @@
-"""The paper's relocation metrics for a proactivity window (DESIGN.md, "Metrics").
+"""The paper's relocation metrics for a proactivity window (its "Metrics" section).
 
 A query is a grid step t of a test day: the observed graph at t and what truly happens at t + 1 .. t + K.
 For a window of w steps, an object is *used* when its true parent changes within (t, t + w]. Only the first

@@ -1,4 +1,4 @@
-"""Dataset statistics as DESIGN.md defines them (numpy and json only).
+"""Dataset statistics: counts of days, moves and objects per household (numpy and json only).
 
 A move is a change of a movable object's parent between two consecutive grid steps; objects_used counts the
 distinct objects with at least one move over all days of a household. Wall time comes from the generation

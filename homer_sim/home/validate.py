@@ -1,6 +1,6 @@
 """The layout validator: consistency of names and places, and the robot's envelope designed in.
 
-Every error is a LayoutError naming the node. The robot (DESIGN.md; its numbers are a `RobotSpec`) needs
+Every error is a LayoutError naming the node. The robot (its numbers are a `RobotSpec`) needs
 doorways of at least its `min_doorway` (0.9 m), places within its `place_heights` (0.05 to 1.2 m), each with a free
 base pose within its `reach` in front of it, and door swings and drawer travel clear of other furniture.
 """

@@ -1,4 +1,4 @@
-"""The Monte Carlo routine sampler of the seed paper's appendix ("Sampling routines"), as DESIGN.md restates it.
+"""The Monte Carlo routine sampler of the seed paper's appendix ("Sampling routines").
 
 Times are routine minutes (minutes since midnight): the day starts at 06:00 = 360 and no activity starts at or
 after 24:00 = 1440 (one that started before may run past midnight). Rules, at each decision time t:

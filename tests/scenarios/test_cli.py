@@ -1,4 +1,4 @@
-"""The `homer` command line: JSON shapes scripts rely on (DESIGN.md), exit codes, recordings."""
+"""The `homer` command line: JSON shapes scripts rely on, exit codes, recordings."""
 
 from __future__ import annotations
 
