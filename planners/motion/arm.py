@@ -123,14 +123,31 @@ class Arm:
 
     def retract(self) -> None:
         """Tuck the arm in place (the base and the torso stay): with an empty hand straight there if that swing
-        touches nothing, quicker; else through `raised`."""
+        touches nothing, quicker; else through `raised`, an empty hand first drawn up and back to the carry point
+        along a checked way (`withdrawal`) where there is one."""
         if not self.folded:
             tucked = self.tucked()
             if self.held is None and self.swing_clear(self.controller.target, tucked):
                 self.controller.move_through([tucked], **FREE_MOTION)
             else:
+                way = self.withdrawal() if self.held is None else []
+                if way:
+                    self.controller.move_through(way)
                 self.controller.move_through([self.raised(self.controller.target[3]), tucked])
         self.folded = True
+
+    def withdrawal(self) -> list[np.ndarray]:
+        """Configurations (each shape (13,)) that take the hand straight up to CARRY_HEIGHT, then straight back to
+        the carry point CARRY_REACHES[0] m in front of the base, its orientation kept, the arm touching nothing on
+        the way; [] where no such way is found. A joint-space swing from an arm reached out over a table into
+        `raised` sweeps through what stands between the base and the hand (a spoon set down beyond the bowl
+        knocked the bowl off the table)."""
+        x, y, yaw = self.controller.target[:3]
+        grip = self.world.data.site("robot/grip")
+        start = grip.xpos.copy()
+        up = np.array([start[0], start[1], max(float(start[2]), CARRY_HEIGHT)])
+        back = np.array([x + CARRY_REACHES[0] * math.cos(yaw), y + CARRY_REACHES[0] * math.sin(yaw), up[2]])
+        return self.checked_line(self.controller.target, [start, up, back], self.grip_quat()) or []
 
     def tucked(self) -> np.ndarray:
         """The tuck posture at the current base pose and torso height (at least the tuck's): the torso is the
