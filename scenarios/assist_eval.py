@@ -117,7 +117,7 @@ def assist_eval(spec: EvalSpec, households: Sequence[str] | None = None, days: i
                 backend: Backend = IN_PROCESS, out: Path | None = None, progress: bool = True) -> dict:
     """Run (or resume) the evaluation, each day a task on `backend` (this process, local processes or Ray: on a
     cluster every node must see the dataset and checkpoints at their paths); returns the `homer assist-eval` JSON
-    (see DESIGN.md) and writes it, the markdown table and the figure into `out` (default: the checkpoint folder's
+    (`summarise`) and writes it, the markdown table and the figure into `out` (default: the checkpoint folder's
     `assist_eval_<method>_<key>`), here only."""
     from tqdm import tqdm
 
@@ -205,13 +205,16 @@ def totals(results: Sequence[dict]) -> dict:
 
 
 def summarise(method: str, results: Sequence[dict], households: Sequence[str]) -> dict:
-    """The `homer assist-eval` JSON: totals, per household, and failures counted by cause."""
+    """The `homer assist-eval` JSON: totals, per household, failures counted by cause, and the person's fetches
+    counted by whether the robot made them ahead or why not (`scenarios.scoring.why_not_ahead`)."""
     failures: Counter = Counter()
+    outcomes: Counter = Counter()
     for r in results:
         failures.update(r["failures"])
+        outcomes.update(r.get("fetch_outcomes", {}))
     per_household = {h: totals([r for r in results if r["household"] == h]) for h in households}
     return {"method": method, "total": totals(results), "per_household": per_household,
-            "failures": dict(failures.most_common())}
+            "failures": dict(failures.most_common()), "fetch_outcomes": dict(outcomes.most_common())}
 
 
 def markdown_table(summary: dict) -> str:
@@ -224,6 +227,8 @@ def markdown_table(summary: dict) -> str:
     lines += [f"| {name} | " + " | ".join(str(row[c]) for c in columns) + " |" for name, row in rows]
     lines += ["", "| failure cause | relocations |", "|---|---|"]
     lines += [f"| {cause} | {n} |" for cause, n in summary["failures"].items()] or ["| (none) | 0 |"]
+    lines += ["", "| the person's fetches: made ahead, or why not | fetches |", "|---|---|"]
+    lines += [f"| {kind} | {n} |" for kind, n in summary.get("fetch_outcomes", {}).items()] or ["| (none) | 0 |"]
     return "\n".join(lines) + "\n"
 
 

@@ -84,6 +84,40 @@ def fetches(assist: AssistLog, reference: DayLog, rooms: set[str], window_min: i
             "fetch_share": round(helped / len(moves), 3) if moves else None}
 
 
+SKIP_KINDS: tuple[tuple[str, str], ...] = (
+    ("in the person's hand", "in the person's hand"),
+    ("the person is at", "the person was there"),
+    ("outside the apartment", "outside the apartment"),
+    ("not graspable", "not graspable"),
+    ("below the threshold", "below the threshold"),
+    ("the robot places only on", "destination not placeable"),
+    ("held on", "held for the person"),
+    ("help went unused", "help went unused before"),
+    ("failed earlier", "failed earlier"),
+)
+"""Why Psi left a predicted move out (the first phrase found in its reason), as a short kind."""
+
+
+def why_not_ahead(fetch: tuple[float, str, str], relocations: Sequence[RelocationOutcome], skipped: Sequence[dict],
+                  window_min: int) -> str:
+    """Why the robot had not made the person's `fetch` (minute, object, place) ahead: "made ahead"; "tried: <cause>"
+    (a relocation of it there within the window failed); "skipped: <kind>" (Psi left that move out, `SKIP_KINDS`);
+    "moved elsewhere" (the robot took the object somewhere else); or "not predicted" (no plan in the window
+    names that move)."""
+    minute, obj, to = fetch
+    if made_ahead(fetch, relocations, window_min):
+        return "made ahead"
+    near = [o for o in relocations if o.relocation.obj == obj and minute - window_min <= o.minute <= minute]
+    tried = [o for o in near if o.relocation.destination == to]
+    if tried:
+        return "tried: " + cause_of(tried[-1].reason)  # not done (else it was made ahead)
+    left = [s["reason"] for s in skipped if s["object"] == obj and s["to"] == to
+            and minute - window_min <= s["minute"] <= minute]
+    if left:
+        return "skipped: " + next((kind for phrase, kind in SKIP_KINDS if phrase in left[-1]), "other")
+    return "moved elsewhere" if near else "not predicted"
+
+
 def score(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...], window_steps: int,
           plans: Sequence[tuple[int, Plan]] = ()) -> dict:
     """Relocations planned, done, and correct against the reference (done but not correct: wrong), with each
@@ -127,13 +161,17 @@ def end_state(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...]) -> d
 def day_result(assist: AssistLog, reference: DayLog, nodes: tuple[str, ...], categories: tuple[str, ...],
                plans: Sequence[tuple[int, Plan]], window_min: int, grid_min: int = GRID_MIN,
                until: float | None = None) -> dict:
-    """Everything measured on one assisted run (JSON-ready): `score`, `fetches` and `end_state`, the robot's
+    """Everything measured on one assisted run (JSON-ready): `score`, `fetches` (and why each was or was not made
+    ahead, counted by kind: `why_not_ahead`) and `end_state`, the robot's
     minutes and skill calls, collateral (objects displaced that no relocation named), failures by cause, the
     person's observed moves and why they stopped early, if they did; `until`: the routine minute the run was cut
     at (None: the whole day)."""
     result = score(assist, reference, nodes, window_min // grid_min, plans)
     rooms = {n for n, c in zip(nodes, categories, strict=True) if c == "room"}
     result.update(fetches(assist, reference, rooms, window_min, until))
+    result["fetch_outcomes"] = dict(sorted(Counter(
+        why_not_ahead(f, assist.relocations, result["skipped"], window_min)
+        for f in person_fetches(reference, rooms, until)).items()))
     result.update(end_state(assist, reference, nodes))
     causes = Counter(row["cause"] for row in result["relocations"] if not row["done"])
     result.update({"robot_minutes": round(assist.robot_minutes, 2), "error": assist.error,

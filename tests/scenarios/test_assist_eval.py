@@ -47,6 +47,8 @@ def test_the_oracle_day_adds_up_and_beats_an_empty_plan(data: Path, tmp_path: Pa
     total = result["total"]
     assert total["days"] == 1 and total["fetches"] >= 4
     assert total["fetches_done_by_robot"] >= 2, result  # the oracle set out breakfast before the person came
+    outcomes = result["fetch_outcomes"]  # every fetch made ahead or given a reason why not
+    assert sum(outcomes.values()) == total["fetches"] and outcomes["made ahead"] == total["fetches_done_by_robot"]
     assert {p.name for p in out.iterdir()} >= {"assist_eval.json", "assist_eval.md", "assist_eval.png", "days"}
     assert "| household_a |" in (out / "assist_eval.md").read_text()
 
@@ -57,6 +59,7 @@ def test_the_oracle_day_adds_up_and_beats_an_empty_plan(data: Path, tmp_path: Pa
     empty = day_result(task.log, task.reference, task.scene.nodes, task.scene.categories, (), 30,
                        until=UNTIL)
     assert empty["fetches"] == total["fetches"] and empty["fetches_done_by_robot"] == 0
+    assert empty["fetch_outcomes"] == {"not predicted": total["fetches"]}
     day = json.loads((out / "days" / "household_a_000.json").read_text())
     assert day["return"] == total["fetches_done_by_robot"] - total["relocations_wrong"] > 0
 
