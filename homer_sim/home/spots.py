@@ -157,11 +157,11 @@ class Spots:
         """Every free spot for object `name` on a place of furniture `node` (drawers assumed open): PLACE_TRIES
         random ones, then a scan on a 2 cm grid (so a crowded shelf with one gap left still finds it), then, for
         cloth, spots on top of what is there. With `packed`, the grid alone, row by row from the front, each
-        from the left, as the start layout packs (`homer_sim.home.placement.pack_spot`): set down against what is
-        there, a thing leaves the free room in one piece for the next (a pot set down in the middle of the stove
-        left no room for the frying pan beside it). On a place with open ends an object longer than the place
-        is wide lies across it, its middle on the place's middle line, where its ends are clear of walls and
-        furniture."""
+        from one end (in a cabinet from the middle out), as the start layout packs
+        (`homer_sim.home.placement.pack_spot`): set down against what is there, a thing leaves the free room in
+        one piece for the next (a pot set down in the middle of the stove left no room for the frying pan beside
+        it). On a place with open ends an object longer than the place is wide lies across it, its middle on the
+        place's middle line, where its ends are clear of walls and furniture."""
         f = self.furniture[node]
         place = self._places[node][place_index]
         world_place = place_world(self.layout, f, place, opened=place.part is not None)
@@ -185,7 +185,9 @@ class Spots:
         ys = (y0 + half_y, y1 - half_y) if y1 - y0 >= 2 * half_y else ((y0 + y1) / 2,) * 2
         drawn = [(rng.uniform(*xs), rng.uniform(*ys)) for _ in range(PLACE_TRIES)]
         if packed:
-            candidates = _packing_order(f, near, xs, ys, half_x, half_y)
+            # in a cabinet from the middle out, as its start layout: where a hand reaches past the door and the walls
+            candidates = _packing_order(f, near, xs, ys, half_x, half_y, place.center[1] if f.kind == "cabinet"
+                                        else None)
         else:
             candidates = drawn + [(x, y) for x in np.arange(xs[0], xs[1] + 1e-9, 0.02)
                                   for y in np.arange(ys[0], ys[1] + 1e-9, 0.02)]
@@ -257,10 +259,11 @@ def _overlaps_any(boxes: np.ndarray, rect: tuple[float, float, float, float]) ->
 
 
 def _packing_order(f, near: np.ndarray, xs: tuple[float, float], ys: tuple[float, float], half_x: float,
-                   half_y: float) -> list[tuple[float, float]]:
+                   half_y: float, centre: float | None = None) -> list[tuple[float, float]]:
     """The free points of the 2 cm grid over xs x ys (world, m) for a footprint of half sizes half_x, half_y, in
     packing order: in the frame of furniture `f` (x out of its front, y along its width), the front row first,
-    each from -y, as `homer_sim.home.placement.pack_spot` packs. `near`: footprints in the way (nan: none)."""
+    each from -y, or from the middle out if `centre` (its y there) is given, as
+    `homer_sim.home.placement.pack_spot` packs. `near`: footprints in the way (nan: none)."""
     gx, gy = np.meshgrid(np.arange(xs[0], xs[1] + 1e-9, 0.02), np.arange(ys[0], ys[1] + 1e-9, 0.02), indexing="ij")
     gx, gy = gx.ravel(), gy.ravel()
     c, s = math.cos(f.yaw), math.sin(f.yaw)
@@ -273,7 +276,7 @@ def _packing_order(f, near: np.ndarray, xs: tuple[float, float], ys: tuple[float
         free = ~hit.any(axis=1)
     else:
         free = np.ones(len(gx), dtype=bool)
-    order = np.lexsort((width, -depth))
+    order = np.lexsort((width, -depth) if centre is None else (width, np.round(np.abs(width - centre), 3), -depth))
     return [(float(gx[k]), float(gy[k])) for k in order if free[k]]
 
 
