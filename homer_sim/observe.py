@@ -250,7 +250,22 @@ class SceneGraphObserver:
         point = start.copy()
         while (hit := self._ray(point, NO_BODY, groups)) is not None and self.geom_node[hit[0]] == node:
             point[2] -= hit[1] + PAST_OWN  # from inside its own geom the ray stops where it leaves it
+            # where its own geom ends on what it stands on, the point past it lies inside that: a ray from there
+            # stops where it leaves that too, level with the floor's top under it (a coffee maker on a counter
+            # read as standing on the floor)
+            holding = self._box_holding(point, node, groups)
+            if holding >= 0:
+                return holding
         return -1 if hit is None else hit[0]
+
+    def _box_holding(self, point: np.ndarray, node: int, groups: np.ndarray) -> int:
+        """A box geom of `groups` not of `node` (nor of no node, a wall) whose inside holds `point`, or -1."""
+        model, data = self.world.model, self.world.data
+        boxes = np.flatnonzero((model.geom_type == mujoco.mjtGeom.mjGEOM_BOX) & (groups[model.geom_group] > 0)
+                               & (self.geom_node >= 0) & (self.geom_node != node))
+        local = np.einsum("nji,nj->ni", data.geom_xmat[boxes].reshape(-1, 3, 3), point - data.geom_xpos[boxes])
+        inside = np.all(np.abs(local) <= model.geom_size[boxes], axis=1)
+        return int(boxes[np.argmax(inside)]) if inside.any() else -1
 
     def _room_below(self, point: np.ndarray, exclude_body: int) -> int:
         hit = self._ray(np.array([point[0], point[1], max(point[2], 0.0) + 0.05]), exclude_body, _FLOOR_GROUPS)

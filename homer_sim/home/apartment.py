@@ -55,8 +55,8 @@ FURNITURE = (
        shelves=(0.45,), top_place=True),
     _f("microwave", "microwave", "cabinet", "dining_room", (5.53, 1.5), "W", (0.5, 0.36, 0.3), "appliance",
        on="kitchen_cabinet", plinth=0.02, hinge="left", rgba=STEEL, door_mass=1.0),
-    _f("coffe_maker", "coffe_maker", "block", "dining_room", (1.85, 0.25), "N", (0.22, 0.25, 0.35), "appliance",
-       on="kitchen_counter_left", no_place=True, rgba=(0.1, 0.1, 0.1, 1.0)),
+    _f("coffe_maker", "coffe_maker", "cabinet", "dining_room", (1.85, 0.25), "N", (0.22, 0.25, 0.35), "appliance",
+       on="kitchen_counter_left", shelves=(0.19,), plinth=0.01, door=False, rgba=(0.1, 0.1, 0.1, 1.0)),
     # Dining and entrance.
     _f("table_dining_room", "table", "table", "dining_room", (2.8, 2.3), "N", (1.4, 0.9, 0.75), access="all"),
     _f("bookshelf_dining_room", "bookshelf", "shelf", "dining_room", (1.5, 4.275), "S", (1.0, 0.35, 1.2),

@@ -182,7 +182,8 @@ def _door(f: Furniture, d: float, w: float, h: float, plinth: float) -> Part:
 
 
 def cabinet(f: Furniture) -> FurnitureGeometry:
-    """A carcass with shelves and one hinge door (cupboards, cabinets, fridge, dishwasher, washer)."""
+    """A carcass with shelves and one hinge door (cupboards, cabinets, fridge, dishwasher, washer); with
+    door=False its front stays open (the bays of a coffee maker: the mug under the spout, the filter above)."""
     w, d, h = f.size
     plinth = f.params.get("plinth", 0.06)
     rgba = tuple(f.params.get("rgba", WOOD))
@@ -199,7 +200,8 @@ def cabinet(f: Furniture) -> FurnitureGeometry:
         places.append(_top_place(d, w, h))
     z0, z1 = plinth + PANEL, h - PANEL
     volume = Volume(((x_back + x_front) / 2, 0.0, (z0 + z1) / 2), ((x_front - x_back) / 2, inner_w, (z1 - z0) / 2))
-    return FurnitureGeometry(tuple(boxes), (_door(f, d, w, h, plinth),), tuple(places), (volume,))
+    doors = (_door(f, d, w, h, plinth),) if f.params.get("door", True) else ()
+    return FurnitureGeometry(tuple(boxes), doors, tuple(places), (volume,))
 
 
 def _drawer(name: str, d: float, w: float, z0: float, z1: float, x_front: float, travel: float) -> tuple:

@@ -19,6 +19,9 @@ from homer_sim.home.furniture import Place, footprint, furniture_geometry, local
 from homer_sim.home.layout import Furniture, Layout, ObjectDecl
 
 SPOT_GAP = 0.025  # m between neighbouring objects
+ROW_GAP = 0.065  # m between rows on an open top at the start: a finger (3.2 cm) and its margin come down between
+# an object and the one behind it, also after the grasp suite shifts the object 2.5 cm (a knife 2.5 cm in front of
+# a dish rack left no room for the finger between them)
 SPAWN_LIFT = 0.001  # m above the surface an object is spawned
 
 
@@ -69,8 +72,8 @@ def _world_to_local_xy(f: Furniture, xy: np.ndarray) -> np.ndarray:
     return np.stack([c * dx + s * dy, -s * dx + c * dy], axis=1)
 
 
-def _overlaps(a: tuple, b: tuple, gap: float) -> bool:
-    return a[0] < b[2] + gap and b[0] < a[2] + gap and a[1] < b[3] + gap and b[1] < a[3] + gap
+def _overlaps(a: tuple, b: tuple, gap_x: float, gap_y: float) -> bool:
+    return a[0] < b[2] + gap_x and b[0] < a[2] + gap_x and a[1] < b[3] + gap_y and b[1] < a[3] + gap_y
 
 
 def lengthwise(f: Furniture, place: Place, cls: ObjectClass) -> bool:
@@ -86,9 +89,11 @@ def stored_yaw(f: Furniture, place: Place, cls: ObjectClass) -> float:
 
 
 def pack_spot(place: Place, cls: ObjectClass, taken: list[tuple], step: float = 0.01,
-              lengthwise: bool = False, centre_first: bool = False) -> tuple[float, float] | None:
+              lengthwise: bool = False, centre_first: bool = False, row_gap: float = SPOT_GAP
+              ) -> tuple[float, float] | None:
     """First free (x, y) in the place frame for an object whose width (its x) runs along the place's y, or
-    along its x (the depth) if `lengthwise`.
+    along its x (the depth) if `lengthwise`, SPOT_GAP from its neighbours beside it and `row_gap` from those in
+    front of or behind it.
 
     Scans from the front edge backwards, left to right (-y first) or, if `centre_first`, from the middle out;
     None if the object does not fit.
@@ -106,7 +111,7 @@ def pack_spot(place: Place, cls: ObjectClass, taken: list[tuple], step: float = 
         ys = np.arange(cy - hy + half_y, cy + hy - half_y + 1e-9, step)
         for y in ys[np.argsort(np.abs(ys - cy), kind="stable")] if centre_first else ys:
             rect = (x - half_x, y - half_y, x + half_x, y + half_y)
-            if not any(_overlaps(rect, t, SPOT_GAP) for t in taken):
+            if not any(_overlaps(rect, t, row_gap, SPOT_GAP) for t in taken):
                 taken.append(rect)
                 return float(x), float(y)
     return None
@@ -177,9 +182,15 @@ def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
             long = lengthwise(f, place, cls)
             # in a cabinet the first declared (the everyday things) stand front and centre, where a hand reaches
             # past the open door and the side walls
-            spot = pack_spot(place, cls, spots, lengthwise=long, centre_first=f.kind == "cabinet")
-            if spot is None and f.kind == "cabinet":  # what does not fit beside them packs from the side
-                spot = pack_spot(place, cls, spots, lengthwise=long)
+            # on an open top the robot's hand comes down from above: rows keep a finger's room between them where
+            # the top has room for that
+            for row_gap in (ROW_GAP, SPOT_GAP) if place.relation == ON else (SPOT_GAP,):
+                spot = pack_spot(place, cls, spots, lengthwise=long, centre_first=f.kind == "cabinet",
+                                 row_gap=row_gap)
+                if spot is None and f.kind == "cabinet":  # what does not fit beside them packs from the side
+                    spot = pack_spot(place, cls, spots, lengthwise=long, row_gap=row_gap)
+                if spot is not None:
+                    break
             if spot is not None:
                 world = local_to_world(f, np.array([spot[0], spot[1], place.center[2]]), base_height(layout, f))
                 pos = (float(world[0]), float(world[1]), float(world[2] + cls.size[2] / 2 + SPAWN_LIFT))

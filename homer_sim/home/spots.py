@@ -147,16 +147,21 @@ class Spots:
         return boxes
 
     def free_spot(self, name: str, node: str, place_index: int, rng: np.random.Generator,
-                  exclude: set[int]) -> Spot | None:
-        """A random free spot for object `name` on a place of furniture `node` (drawers assumed open)."""
-        return next(self.free_spots(name, node, place_index, rng, exclude), None)
+                  exclude: set[int], packed: bool = False) -> Spot | None:
+        """A random free spot for object `name` on a place of furniture `node` (drawers assumed open); with
+        `packed`, the first in packing order (see `free_spots`)."""
+        return next(self.free_spots(name, node, place_index, rng, exclude, packed), None)
 
     def free_spots(self, name: str, node: str, place_index: int, rng: np.random.Generator,
-                   exclude: set[int]) -> Iterator[Spot]:
+                   exclude: set[int], packed: bool = False) -> Iterator[Spot]:
         """Every free spot for object `name` on a place of furniture `node` (drawers assumed open): PLACE_TRIES
         random ones, then a scan on a 2 cm grid (so a crowded shelf with one gap left still finds it), then, for
-        cloth, spots on top of what is there. On a place with open ends an object longer than the place is wide
-        lies across it, its middle on the place's middle line, where its ends are clear of walls and furniture."""
+        cloth, spots on top of what is there. With `packed`, the grid alone, row by row from the front, each
+        from one end (in a cabinet from the middle out), as the start layout packs
+        (`homer_sim.home.placement.pack_spot`): set down against what is there, a thing leaves the free room in
+        one piece for the next (a pot set down in the middle of the stove left no room for the frying pan beside
+        it). On a place with open ends an object longer than the place is wide lies across it, its middle on the
+        place's middle line, where its ends are clear of walls and furniture."""
         f = self.furniture[node]
         place = self._places[node][place_index]
         world_place = place_world(self.layout, f, place, opened=place.part is not None)
@@ -178,9 +183,14 @@ class Spots:
             near = np.vstack([near, standing])
         xs = (x0 + half_x, x1 - half_x) if x1 - x0 >= 2 * half_x else ((x0 + x1) / 2,) * 2  # across: its middle
         ys = (y0 + half_y, y1 - half_y) if y1 - y0 >= 2 * half_y else ((y0 + y1) / 2,) * 2
-        candidates = [(rng.uniform(*xs), rng.uniform(*ys)) for _ in range(PLACE_TRIES)]
-        candidates += [(x, y) for x in np.arange(xs[0], xs[1] + 1e-9, 0.02) for y in np.arange(ys[0], ys[1] + 1e-9,
-                                                                                                 0.02)]
+        drawn = [(rng.uniform(*xs), rng.uniform(*ys)) for _ in range(PLACE_TRIES)]
+        if packed:
+            # in a cabinet from the middle out, as its start layout: where a hand reaches past the door and the walls
+            candidates = _packing_order(f, near, xs, ys, half_x, half_y, place.center[1] if f.kind == "cabinet"
+                                        else None)
+        else:
+            candidates = drawn + [(x, y) for x in np.arange(xs[0], xs[1] + 1e-9, 0.02)
+                                  for y in np.arange(ys[0], ys[1] + 1e-9, 0.02)]
         for x, y in candidates:
             rect = (x - half_x, y - half_y, x + half_x, y + half_y)
             if across and not self._ends_clear(rect, footprint(f)):
@@ -188,7 +198,7 @@ class Spots:
             if not _overlaps_any(near, rect):
                 yield Spot((float(x), float(y), z + size[2] / 2 + DROP_LIFT), yaw, node, place_index)
         if cls.family == "cloth":
-            for x, y in candidates[:PLACE_TRIES]:  # soft things pile up: on top of what is there
+            for x, y in drawn:  # soft things pile up: on top of what is there
                 landing = self.landing_z(name, (x, y), z + place.clearance)
                 if landing + size[2] / 2 <= z + place.clearance:
                     yield Spot((float(x), float(y), landing), yaw, node, place_index)
@@ -246,6 +256,28 @@ def _overlaps_any(boxes: np.ndarray, rect: tuple[float, float, float, float]) ->
     hit = (boxes[:, 0] < rect[2] + g) & (rect[0] < boxes[:, 2] + g) & (boxes[:, 1] < rect[3] + g) & (
         rect[1] < boxes[:, 3] + g)
     return bool(np.any(hit))
+
+
+def _packing_order(f, near: np.ndarray, xs: tuple[float, float], ys: tuple[float, float], half_x: float,
+                   half_y: float, centre: float | None = None) -> list[tuple[float, float]]:
+    """The free points of the 2 cm grid over xs x ys (world, m) for a footprint of half sizes half_x, half_y, in
+    packing order: in the frame of furniture `f` (x out of its front, y along its width), the front row first,
+    each from -y, or from the middle out if `centre` (its y there) is given, as
+    `homer_sim.home.placement.pack_spot` packs. `near`: footprints in the way (nan: none)."""
+    gx, gy = np.meshgrid(np.arange(xs[0], xs[1] + 1e-9, 0.02), np.arange(ys[0], ys[1] + 1e-9, 0.02), indexing="ij")
+    gx, gy = gx.ravel(), gy.ravel()
+    c, s = math.cos(f.yaw), math.sin(f.yaw)
+    depth = np.round(c * (gx - f.pos[0]) + s * (gy - f.pos[1]), 3)
+    width = np.round(-s * (gx - f.pos[0]) + c * (gy - f.pos[1]), 3)
+    g = SPOT_GAP
+    if len(near):
+        hit = ((near[None, :, 0] < gx[:, None] + half_x + g) & (gx[:, None] - half_x < near[None, :, 2] + g)
+               & (near[None, :, 1] < gy[:, None] + half_y + g) & (gy[:, None] - half_y < near[None, :, 3] + g))
+        free = ~hit.any(axis=1)
+    else:
+        free = np.ones(len(gx), dtype=bool)
+    order = np.lexsort((width, -depth) if centre is None else (width, np.round(np.abs(width - centre), 3), -depth))
+    return [(float(gx[k]), float(gy[k])) for k in order if free[k]]
 
 
 def _footprint_rect(f) -> tuple[float, float, float, float]:

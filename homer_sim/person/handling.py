@@ -372,7 +372,7 @@ class Handling:
                 needed = [a for a in self.parts.get(target, []) if a.joint_type == "hinge" or
                           a.name.endswith("/" + (place.part or ""))]
                 self.ensure_open(needed, opened)
-            spot = self.spots.free_spot(name, target, index, self.day.rng, exclude)
+            spot = self.spots.free_spot(name, target, index, self.day.rng, exclude, packed=True)
             if spot is not None:
                 self.release(name, spot)
                 self.close_parts(opened)

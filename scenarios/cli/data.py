@@ -201,8 +201,9 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     check.add_argument("--days", type=int, default=None,
                        help="check only the first N days (training days first, in number order)")
     check.add_argument("--out", type=Path, default=None,
-                       help="also write the completed days here as a dataset (to score predictors on the replay "
-                       "with homer evaluate --data OUT); a new or empty folder, or one this check wrote")
+                       help="also write the completed days here as a dataset, each up to the authors' last graph "
+                       "step (to score predictors on the replay with homer evaluate --data OUT); a new or empty "
+                       "folder, or one this check wrote")
     add_backend_arguments(check, "days")
     check.add_argument("--json", action="store_true",
                        help='print {"days", "days_completed", "agreement", "graph_changes_seen", "agreement_known", '

@@ -203,3 +203,21 @@ def test_a_guitar_lies_across_a_chair_and_nothing_is_put_into_an_appliance_on_a_
         hx, hy = (c * sx + s * sy) / 2, (s * sx + c * sy) / 2
         assert not (x0 - hx < spot.pos[0] < x1 + hx and y0 - hy < spot.pos[1] < y1 + hy)
     assert found  # there is room beside the microwave
+
+
+def test_a_put_down_packs_against_what_is_there(executor: Executor) -> None:
+    """The person sets a thing down as the start layout packs (the front row first, from one end): the cooking pot
+    goes beside the sauce pan on the stove, not into the middle of the free room, and the frying pan still finds
+    room there after it (a pot set down in the middle of the stove left none)."""
+    executor.start_day(np.random.default_rng(0))
+    world = executor.world
+    for name in ("cookingpot", "fryingpan"):
+        executor.grab(name)
+        executor.put(name, "stove", None)
+        executor.hands.settle()
+        assert executor.observer.update().parent_of(name) == "stove"
+    stove = next(f for f in world.layout.furniture if f.name == "stove")
+    front = stove.pos[1] + stove.size[1] / 2  # it faces north
+    pot, pan = world.object_pose("cookingpot")[0], world.object_pose("fryingpan")[0]
+    assert front - pot[1] < CATALOG["cookingpot"].size[1] / 2 + 0.06  # in the front row
+    assert pan[1] < pot[1]  # the front row was full: the pan went behind

@@ -77,3 +77,25 @@ def test_object_that_does_not_fit_is_rejected() -> None:
     with pytest.raises(LayoutError, match="does not fit") as error:
         validate_layout(crowded)
     assert "book_" in str(error.value) and "table_bedroom" in str(error.value)
+
+
+def test_rows_on_an_open_top_leave_a_finger_between_them() -> None:
+    """On an open top the start layout keeps ROW_GAP between an object and the one behind it where the top has
+    room (a dish rack packed 2.5 cm behind the chef's knife on the oven left no room for a finger), and falls back
+    to SPOT_GAP where it has not."""
+    from homer_sim.home.catalog import CATALOG
+    from homer_sim.home.furniture import Place
+    from homer_sim.home.placement import ROW_GAP, SPOT_GAP, pack_spot
+
+    knife, rack = CATALOG["chef_knife"], CATALOG["dishrack"]
+    deep = Place(ON, (0.0, 0.0, 0.85), (0.285, 0.335), 0.6)
+    taken: list[tuple] = []
+    front = pack_spot(deep, knife, taken, row_gap=ROW_GAP)
+    behind = pack_spot(deep, rack, taken, row_gap=ROW_GAP)
+    gap = (front[0] - knife.size[1] / 2) - (behind[0] + rack.size[1] / 2)  # place x runs to the front
+    assert gap >= ROW_GAP - 1e-9
+    shallow = Place(ON, (0.0, 0.0, 0.85), (0.18, 0.335), 0.6)  # 36 cm deep: no room for ROW_GAP
+    taken = []
+    pack_spot(shallow, knife, taken, row_gap=ROW_GAP)
+    assert pack_spot(shallow, rack, list(taken), row_gap=ROW_GAP) is None
+    assert pack_spot(shallow, rack, taken, row_gap=SPOT_GAP) is not None

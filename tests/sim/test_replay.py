@@ -355,3 +355,18 @@ def test_replay_check_on_two_real_days_completes_them_and_counts_every_left_out_
     left_out = Counter({cause.split(": ", 1)[1]: n for cause, n in result["causes"].items()
                         if cause.startswith("action left out, missing")})
     assert left_out == lacking and "chair (194)" not in lacking and "toothbrush_holder" not in lacking
+
+
+def test_replayed_day_is_written_over_the_span_of_the_authors_graphs() -> None:
+    """Their scripts sleep on past midnight and our replay lives that; the day written for predictors stops at
+    their last graph step, as theirs do (moves after it go with the steps)."""
+    from homer_sim.data.dataset import Day
+    from homer_sim.data.replay_check import over_span
+
+    minutes = np.arange(360, 1531, 10, dtype=np.int32)
+    parent = np.zeros((len(minutes), 3), dtype=np.int16)
+    day = Day("HouseholdT", "train", 0, minutes, parent, np.zeros_like(parent, dtype=np.int8),
+              moves=((480.0, "bowl", "cupboard", "table", "ON"), (1450.5, "bowl", "table", "sink", "INSIDE")))
+    cut = over_span(day, 1440)
+    assert cut.minutes[0] == 360 and cut.minutes[-1] == 1440 and cut.parent.shape == (109, 3)
+    assert cut.moves == day.moves[:1]
