@@ -179,7 +179,8 @@ class Arm:
         return lambda q: self.clearance.clear(q, held=held)
 
     def go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float, here_first: bool = False,
-                     direct: bool = False) -> tuple[list[np.ndarray], float] | None:
+                     direct: bool = False, rise: float = 0.0, held: Held | None = None
+                     ) -> tuple[list[np.ndarray], float] | None:
         """Drive (arm tucked) to a free base pose from which the way into `grasp` is reachable with the arm
         clear of the apartment: the grip `entry` m out along `pull` (a horizontal unit vector out of the
         furniture, shape (3,)) from the approach point, in along a straight line, the approach, and SIDE_LIFT m
@@ -188,13 +189,16 @@ class Arm:
         Base poses face the grasp along its approach, then, where the approach leans more than ASIDE_LEAN aside
         (see `rolled_grasps`), also into the furniture (against `pull`): beside it often no base pose is free.
         With `here_first`, where the robot stands is tried first; with `direct`, the arm may also swing straight
-        from the tuck (see `way_in`)."""
+        from the tuck (see `way_in`). `rise`: m the object must rise before it is drawn out (over what stands in
+        front of it, `rise_to_pass`); the first lift is at least that, and where it is more than SIDE_LIFT, the
+        object (`held`, as the grasp would hold it) is checked clear of the compartment at its top."""
         quat = grasp.quat()
         above = grasp.position - grasp.approach * grasp.rotation[:, 0]
         obstacles = self.navigator.obstacles()
         here = [tuple(self.controller.target[:3])] if here_first else []
         candidates = self._grasp_bases(grasp, pull)
         lifts = (SIDE_LIFT, LOW_SIDE_LIFT) if np.linalg.norm(pull) > 0.0 else (SIDE_LIFT,)  # a shelf grasp's first leg
+        lifts = tuple(dict.fromkeys(max(h, rise) for h in lifts))
         free = self.navigator.radius + CLEARANCE
         for base in [*here, *candidates]:
             if base not in here and not self.navigator.plan.disk_is_free(base[0], base[1], free, obstacles):
@@ -205,8 +209,8 @@ class Arm:
             if not start.converged or not self.clearance.clear(start.q):
                 continue
             path = self.checked_line(start.q, [above + entry * pull, above], quat)
-            lift = None if path is None else next((h for h in lifts if self.checked_line(
-                path[-1], [above, grasp.position, grasp.position + np.array([0.0, 0.0, h])], quat) is not None), None)
+            lift = None if path is None else next((h for h in lifts if self._lift_clear(
+                path[-1], above, grasp, h, held if h > SIDE_LIFT else None)), None)
             if lift is None:
                 continue
             lead = self.way_in(base, start.q, above + entry * pull, quat, direct)
@@ -219,6 +223,14 @@ class Arm:
                 q_in[:3] = self.controller.target[:3]  # where the base really stopped
             return path_in, lift
         return None
+
+    def _lift_clear(self, q: np.ndarray, above: np.ndarray, grasp: Grasp, lift: float, held: Held | None) -> bool:
+        """Whether the arm, from configuration q (shape (13,)) at the approach point `above` (m), comes down onto
+        `grasp` and lifts `lift` m clear of the apartment, and `held` (if given, the object in the hand) is clear
+        there at the top (it rests on its shelf at the grasp)."""
+        top = grasp.position + np.array([0.0, 0.0, lift])
+        path = self.checked_line(q, [above, grasp.position, top], grasp.quat())
+        return path is not None and (held is None or self.clearance.clear(path[-1], held=held))
 
     def _grasp_bases(self, grasp: Grasp, pull: np.ndarray) -> list[tuple[float, float, float]]:
         """Base poses (x m, y m, yaw rad) to try for `grasp` (see `base_candidates`): facing it along its
