@@ -21,6 +21,7 @@ from homer_sim.home.catalog import CATALOG
 from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
 from planners.grasps.geometry import axis_rotation, matrix_to_quat, yaw_matrix
+from planners.grasps.neighbours import tallest_beside
 from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, PITCHED_HAND, SIDE_LIFT, Arm
 from planners.motion.clearance import ARC_BASE_COST, Held
 from planners.motion.control import CARRY_MOTION
@@ -46,6 +47,8 @@ SHELF_SPOT_GAP = 0.05  # m apart at least
 EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
 RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to let go (inside a shelf)
 TOP_RELEASE_OPENING = 0.05  # m per finger the fingers open at least to let go on an open top
+PASS_NEAR = 0.5  # m from its spot within which what stands on the surface is carried over (a can of wipes held
+# from the side at the carry point hung 5 cm above the stove and swept the 10 cm sauce pan 32 cm aside)
 
 
 class Place:
@@ -149,12 +152,14 @@ class Place:
 
     def _carry_to(self, name: str, node: str, target: np.ndarray) -> tuple[SkillResult | None, bool]:
         """Carry `name` to a base pose in front of furniture `node` facing `target` (m, the spot it goes to; see
-        `Arm.go_to`): (a failure if it could not or the object fell out of the hand on the way; whether the robot
-        stopped short with the object low)."""
+        `Arm.go_to`), held over what stands within PASS_NEAR of the spot: (a failure if it could not or the object
+        fell out of the hand on the way; whether the robot stopped short with the object low)."""
         held_at = self.arm.held_offset(name)  # where the object hangs in the hand (grip frame)
         size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        surface = target[2] - size[2] / 2  # the held object passes over what stands near its spot, too
         try:
-            short = self.arm.go_to(node, target[:2], surface_z=target[2] - size[2] / 2)
+            short = self.arm.go_to(node, target[:2], surface_z=tallest_beside(self.world, name, target, surface,
+                                                                              PASS_NEAR))
         except NavigationError as error:
             return SkillResult(False, f"place: {error}"), False
         return self._fell_out(name, held_at), short
@@ -174,7 +179,8 @@ class Place:
         """Lower the held `name` onto `target` (m) on furniture `node` from APPROACH m above, as it hangs in the
         hand (turned to stand it up, see `_lowering_rotations`), let go and retreat. Stopped `short` with the object
         low: first lift it over the surface, then drive in close (the object passes over the edge) and move it
-        across to above the spot in a straight line."""
+        across to above the spot in a straight line. Nothing is lowered where the arm or the object would come
+        down on another object (`_struck`)."""
         grip = self.world.data.site("robot/grip")
         now = grip.xmat.reshape(3, 3)
         offset = grip.xpos - self.world.object_pose(name)[0]  # where the object hangs from the hand now
@@ -199,9 +205,22 @@ class Place:
         down = self.arm.line(above, release, quat)
         if down is None:
             return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
+        struck = self._struck(name, down)
+        if struck:
+            return SkillResult(False, f"place: lowering {name} onto {node} would strike {', '.join(struck)}")
         self.controller.move_through(down)
         self.controller.settle(0.003)
         return self._release_on(name, node, target, release, quat)
+
+    def _struck(self, name: str, path: list[np.ndarray]) -> list[str]:
+        """The objects other than the held `name` that the arm or `name` (as it hangs in the hand now) would touch
+        along `path` (configurations, each shape (13,)): a lowering no clear way was found for is not tried onto
+        them (a wrist came down on a sauce pan beside the spot and pushed it)."""
+        held = self.arm.held_object(name)
+        bodies = {int(b): n for n, b in zip(self.world.object_names, self.world.object_body_ids, strict=True)}
+        own = int(self.world.object_body_ids[self.world.object_index(name)])
+        struck = set().union(*(self.clearance.bodies_struck(q, held, frozenset(bodies) - {own}) for q in path))
+        return sorted(bodies[b] for b in struck)
 
     def _release_on(self, name: str, node: str, target: np.ndarray, release: np.ndarray, quat: np.ndarray
                     ) -> SkillResult:
