@@ -46,9 +46,10 @@ def rise_to_pass(world, name: str, position: np.ndarray, out: np.ndarray, front:
     index = world.object_index(name)
     size = CATALOG[world.layout.objects[index].cls].size
     bottom = position[2] - size[2] / 2
-    half = max(size[0], size[1]) / 2 + IN_LINE  # the object may stand (or hang in the hand) turned
     out = np.asarray(out, dtype=float)[:2]
     across = np.array([-out[1], out[0]])
+    own = footprint(CATALOG[world.layout.objects[index].cls], position, world.object_pose(name)[1])
+    half = float(np.max(np.abs((own - np.asarray(position[:2])) @ across))) + IN_LINE  # as it stands turned
     highest = -np.inf
     for k, decl in enumerate(world.layout.objects):
         if k == index:

@@ -21,7 +21,7 @@ from homer_sim.home.catalog import CATALOG
 from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
 from planners.grasps.geometry import axis_rotation, matrix_to_quat, yaw_matrix
-from planners.grasps.neighbours import tallest_beside
+from planners.grasps.neighbours import rise_to_pass, tallest_beside
 from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, PITCHED_HAND, SIDE_LIFT, Arm
 from planners.motion.clearance import ARC_BASE_COST, Held
 from planners.motion.control import CARRY_MOTION
@@ -348,8 +348,8 @@ class Place:
     def _place_in_shelf(self, name: str, node: str, places: list[int]) -> SkillResult:
         """Put the held object on a shelf inside cabinet `node` (`places`: its shelf indices), the reverse of
         `_pick_from_shelf`: from a base pose where the object and the arm clear the cabinet and its contents, in
-        SIDE_LIFT m above a free spot (spots nearest the front first, then those of each shelf none of those is on),
-        down, release, and straight out."""
+        SIDE_LIFT m (or over what stands in front of it, `rise_to_pass`) above a free spot (spots nearest the
+        front first, then those of each shelf none of those is on), down, release, and out the way it went in."""
         index = self.world.object_index(name)
         size = np.asarray(CATALOG[self.world.layout.objects[index].cls].size)
         furniture = self.navigator.furniture[node]
@@ -371,20 +371,24 @@ class Place:
         for spot in spots:
             release = np.array(spot.pos) + np.array([0.0, 0.0, 0.01]) - rotation @ held.position
             outside = release + (float(np.dot(front - release[:2], out)) + clear_out) * pull
-            points = [outside + SIDE_LIFT * up, release + SIDE_LIFT * up, release]
+            over = max(SIDE_LIFT, rise_to_pass(self.world, name, np.array(spot.pos), out,
+                                               float(np.dot(front - np.array(spot.pos[:2]), out))))
+            points = [outside + over * up, release + over * up, release]
             planned = self._drive_for(points, rotation, posture, held)
             if planned is None:
                 continue
-            return self._go_in(name, node, np.array(spot.pos), rotation, held, planned, release, outside)
+            return self._go_in(name, node, np.array(spot.pos), rotation, held, planned, release, outside, over)
         return SkillResult(False, f"place: no free base pose puts {name} into {node} without it or the arm "
                                   f"touching {node} or its contents ({len(spots)} spots tried)")
 
     def _go_in(self, name: str, node: str, spot: np.ndarray, rotation: np.ndarray, held: Held,
-               planned: tuple[list[np.ndarray], list[np.ndarray]], release: np.ndarray, outside: np.ndarray
-               ) -> SkillResult:
+               planned: tuple[list[np.ndarray], list[np.ndarray]], release: np.ndarray, outside: np.ndarray,
+               over: float = SIDE_LIFT) -> SkillResult:
         """Carry `held` (`name`) into cabinet `node` along `planned` (from `_drive_for`) and let it go on the
-        shelf at `spot` (m): eased in, aimed again where it turned in the fingers on the way (the grip site at
-        `release`, m, as planned, at `rotation`), down, released and drawn straight out to `outside` (m)."""
+        shelf at `spot` (m): eased in `over` m above the shelf, aimed again where it turned in the fingers on the
+        way (the grip site at `release`, m, as planned, at `rotation`), down, released and drawn out to `outside`
+        (m), straight, or, where it went in higher than SIDE_LIFT (over what stands in front), up that high
+        first."""
         quat, up = matrix_to_quat(rotation), np.array([0.0, 0.0, 1.0])
         ease, path_in = planned
         self._ease_to(ease, path_in[0])
@@ -394,8 +398,8 @@ class Place:
             return SkillResult(False, f"place: {name} fell out of the hand on the way into {node}")
         now = self.arm.held_object(name)  # the object may have turned in the fingers on the way: aim it again
         again = spot + np.array([0.0, 0.0, 0.01]) - rotation @ now.position
-        entry = outside + SIDE_LIFT * up
-        replanned = self.arm.checked_line(self.controller.target, [entry, again + SIDE_LIFT * up, again], quat, now)
+        entry = outside + over * up
+        replanned = self.arm.checked_line(self.controller.target, [entry, again + over * up, again], quat, now)
         slip = float(np.linalg.norm(now.position - held.position))
         if replanned is not None:
             path_in, release = [self.controller.target.copy(), *replanned], again
@@ -404,8 +408,12 @@ class Place:
                                       f"{node} and no longer goes in clear")
         self.controller.move_through(path_in[1:])
         self.controller.settle(0.003)
-        return self._let_go(name, node, self._held_opening() + RELEASE_OPENING,
-                            self.arm.line(release, outside, quat, steps=4, loose_end=True), inside=True)
+        away = self.arm.line(release, outside, quat, steps=4, loose_end=True)
+        if over > SIDE_LIFT:
+            up_first = self.arm.line(release, release + over * up, quat, loose_end=True)
+            away = None if up_first is None else up_first + (self.arm.line(
+                release + over * up, outside + over * up, quat, steps=4, loose_end=True, seed=up_first[-1]) or [])
+        return self._let_go(name, node, self._held_opening() + RELEASE_OPENING, away, inside=True)
 
     def _into_shelf(self, out: np.ndarray) -> np.ndarray:
         """The grip rotation (shape (3, 3)) that carries the held object into a shelf whose front faces `out`
