@@ -22,7 +22,7 @@ from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
 from planners.grasps.geometry import axis_rotation, matrix_to_quat, yaw_matrix
 from planners.grasps.neighbours import rise_to_pass, tallest_beside
-from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, PITCHED_HAND, SIDE_LIFT, Arm
+from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, PITCHED_HAND, PULL_BASE_COST, SIDE_LIFT, Arm
 from planners.motion.clearance import ARC_BASE_COST, Held
 from planners.motion.control import CARRY_MOTION
 from planners.motion.navigation import CLEARANCE, NavigationError, base_candidates
@@ -197,11 +197,19 @@ class Place:
                                         self.controller.target.copy(), **CARRY_MOTION)
             except NavigationError:
                 pass  # reach from where it stands
-        if not self.arm.grip_line(above, quat):
+        over = self.arm.hand_line(above, quat, PULL_BASE_COST)
+        if over is None:
             pre = self.arm.solve(above, quat)
             if not pre.converged:
                 return SkillResult(False, f"place: {name} above {node} is {pre.reason}")
-            self.arm.reach(pre.q)
+            over = [pre.q]
+        struck = self._struck(name, over)
+        if struck:
+            return SkillResult(False, f"place: {name} on its way above {node} would strike {', '.join(struck)}")
+        if len(over) > 1:
+            self.controller.move_through(over)
+        else:
+            self.arm.reach(over[0])
         down = self.arm.line(above, release, quat)
         if down is None:
             return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
