@@ -215,17 +215,19 @@ class Arm:
         (see `rolled_grasps`), also into the furniture (against `pull`): beside it often no base pose is free.
         With `here_first`, where the robot stands is tried first; with `direct`, the arm may also swing straight
         from the tuck (see `way_in`). `rise`: m the object must rise before it is drawn out (over what stands in
-        front of it, `rise_to_pass`); the first lift is at least that, and where it is more than SIDE_LIFT, the
-        object (`held`, as the grasp would hold it) is checked clear of the compartment at its top."""
+        front of it, `rise_to_pass`): where it is more than SIDE_LIFT, that lift is tried first, the object (`held`,
+        as the grasp would hold it) checked clear of the compartment at its top, from every base pose; the others
+        where none reaches it (the neighbour's outline is a box round it: a trash bag drawn out low passed the can
+        beside it)."""
         quat = grasp.quat()
         above = grasp.position - grasp.approach * grasp.rotation[:, 0]
         obstacles = self.navigator.obstacles()
         here = [tuple(self.controller.target[:3])] if here_first else []
         candidates = self._grasp_bases(grasp, pull)
         lifts = (SIDE_LIFT, LOW_SIDE_LIFT) if np.linalg.norm(pull) > 0.0 else (SIDE_LIFT,)  # a shelf grasp's first leg
-        lifts = tuple(dict.fromkeys(max(h, rise) for h in lifts))
         free = self.navigator.radius + CLEARANCE
-        for base in [*here, *candidates]:
+        passes = [(rise,), lifts] if rise > SIDE_LIFT else [lifts]  # over what stands in front first, where it reaches
+        for lifts, base in [(heights, base) for heights in passes for base in [*here, *candidates]]:
             if base not in here and not self.navigator.plan.disk_is_free(base[0], base[1], free, obstacles):
                 continue
             q = self.tuck.copy()
