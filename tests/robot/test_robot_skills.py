@@ -230,3 +230,18 @@ def test_a_wine_glass_behind_the_dishwashers_cup_comes_out_over_it_and_stays_in_
     assert not robot.arm.hand_empty(), "the wine glass fell out of the hand"
     drift, name = _others_moved(world, before, "wine_glass")
     assert drift < 0.02, f"{name} moved {drift * 100:.1f} cm"
+
+
+def test_what_stands_near_a_spot_on_a_top_is_what_a_carried_object_must_pass_over() -> None:
+    """`tallest_beside`: near its spot on the stove the sauce pan's top, not the stove's surface, is the height a
+    carried object must pass over (a can of wipes carried 5 cm over the stove swept the pan 32 cm aside); far
+    from the pan, the surface."""
+    from planners.grasps.neighbours import tallest_beside
+
+    world = World(extras=[add_robot])
+    pan = world.object_pose("sauce_pan")[0]
+    surface = pan[2] - CATALOG["sauce_pan"].size[2] / 2
+    near = pan + np.array([-0.25, -0.1, 0.0])
+    assert abs(tallest_beside(world, "disinfectant_wipes", near, surface, 0.5) - (pan[2] + CATALOG["sauce_pan"].size[
+        2] / 2)) < 1e-6
+    assert tallest_beside(world, "disinfectant_wipes", pan + np.array([-0.8, 0.0, 0.0]), surface, 0.5) == surface
