@@ -32,6 +32,8 @@ CARRY_ARM_SPEED = 0.2  # peak joint speed (fraction of the limit) moving a held 
 CARRY_STEP = 0.05  # m between IK waypoints on the way to the carry point
 TURN_STEP = 0.15  # rad the hand turns at most between IK waypoints of a move between poses
 RAISED_SHOULDER = -1.0  # rad: upper arm raised above the tuck
+RETRACT_RISE = 0.3  # m the hand rises at most before a retract swings it into the raised arm (`Arm.retract`),
+RETRACT_STEP = 0.05  # m between the heights checked on the way
 SIDE_LIFT = 0.03  # m: a side grasp first lifts the object this much off its shelf,
 LOW_SIDE_LIFT = 0.015  # m: or only this much where the wrist would come within ClearanceCheck.MARGIN of the
 # compartment's top or the shelf above (a trash bag's tie 3.5 cm under a cabinet's top)
@@ -123,14 +125,37 @@ class Arm:
 
     def retract(self) -> None:
         """Tuck the arm in place (the base and the torso stay): with an empty hand straight there if that swing
-        touches nothing, quicker; else through `raised`."""
+        touches nothing, quicker; else through `raised`, the hand first risen clear for that swing where it must
+        (`_rise_to_swing`)."""
         if not self.folded:
             tucked = self.tucked()
             if self.held is None and self.swing_clear(self.controller.target, tucked):
                 self.controller.move_through([tucked], **FREE_MOTION)
             else:
+                self._rise_to_swing()
                 self.controller.move_through([self.raised(self.controller.target[3]), tucked])
         self.folded = True
+
+    def _rise_to_swing(self) -> None:
+        """Where the joint-space swing into `raised` would touch something, first move the hand straight up, every
+        RETRACT_STEP m as long as the arm (and what it holds) touches nothing, RETRACT_RISE m at most, to the
+        first height from which that swing is clear (or the highest clear one): a hand let go low over a low
+        table swung sideways into the raised arm across it and pushed a violin 18 cm."""
+        held = None if self.held is None else self.held_object(self.held)
+        if self.swing_clear(self.controller.target, self.raised(self.controller.target[3]), held):
+            return
+        grip, quat = self.ik.grip_pose(self.controller.target)
+        steps = int(round(RETRACT_RISE / RETRACT_STEP))
+        path = self.line(grip, grip + np.array([0.0, 0.0, RETRACT_RISE]), quat, steps=steps, partial=True)
+        up = []
+        for q in path:
+            if not self.clearance.clear(q, held=held):
+                break
+            up.append(q)
+            if self.swing_clear(q, self.raised(q[3]), held):
+                break
+        if up:
+            self.controller.move_through(up)
 
     def tucked(self) -> np.ndarray:
         """The tuck posture at the current base pose and torso height (at least the tuck's): the torso is the
