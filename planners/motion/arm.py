@@ -32,6 +32,8 @@ CARRY_ARM_SPEED = 0.2  # peak joint speed (fraction of the limit) moving a held 
 CARRY_STEP = 0.05  # m between IK waypoints on the way to the carry point
 TURN_STEP = 0.15  # rad the hand turns at most between IK waypoints of a move between poses
 RAISED_SHOULDER = -1.0  # rad: upper arm raised above the tuck
+RETRACT_RISE = 0.3  # m the hand rises at most before a retract swings it into the raised arm (`Arm.retract`),
+RETRACT_STEP = 0.05  # m between the heights checked on the way
 SIDE_LIFT = 0.03  # m: a side grasp first lifts the object this much off its shelf,
 LOW_SIDE_LIFT = 0.015  # m: or only this much where the wrist would come within ClearanceCheck.MARGIN of the
 # compartment's top or the shelf above (a trash bag's tie 3.5 cm under a cabinet's top)
@@ -123,31 +125,37 @@ class Arm:
 
     def retract(self) -> None:
         """Tuck the arm in place (the base and the torso stay): with an empty hand straight there if that swing
-        touches nothing, quicker; else through `raised`, an empty hand first drawn up and back to the carry point
-        along a checked way (`withdrawal`) where there is one."""
+        touches nothing, quicker; else through `raised`, the hand first risen clear for that swing where it must
+        (`_rise_to_swing`)."""
         if not self.folded:
             tucked = self.tucked()
             if self.held is None and self.swing_clear(self.controller.target, tucked):
                 self.controller.move_through([tucked], **FREE_MOTION)
             else:
-                way = self.withdrawal() if self.held is None else []
-                if way:
-                    self.controller.move_through(way)
+                self._rise_to_swing()
                 self.controller.move_through([self.raised(self.controller.target[3]), tucked])
         self.folded = True
 
-    def withdrawal(self) -> list[np.ndarray]:
-        """Configurations (each shape (13,)) that take the hand straight up to CARRY_HEIGHT, then straight back to
-        the carry point CARRY_REACHES[0] m in front of the base, its orientation kept, the arm touching nothing on
-        the way; [] where no such way is found. A joint-space swing from an arm reached out over a table into
-        `raised` sweeps through what stands between the base and the hand (a spoon set down beyond the bowl
-        knocked the bowl off the table)."""
-        x, y, yaw = self.controller.target[:3]
-        grip = self.world.data.site("robot/grip")
-        start = grip.xpos.copy()
-        up = np.array([start[0], start[1], max(float(start[2]), CARRY_HEIGHT)])
-        back = np.array([x + CARRY_REACHES[0] * math.cos(yaw), y + CARRY_REACHES[0] * math.sin(yaw), up[2]])
-        return self.checked_line(self.controller.target, [start, up, back], self.grip_quat()) or []
+    def _rise_to_swing(self) -> None:
+        """Where the joint-space swing into `raised` would touch something, first move the hand straight up, every
+        RETRACT_STEP m as long as the arm (and what it holds) touches nothing, RETRACT_RISE m at most, to the
+        first height from which that swing is clear (or the highest clear one): a hand let go low over a low
+        table swung sideways into the raised arm across it and pushed a violin 18 cm."""
+        held = None if self.held is None else self.held_object(self.held)
+        if self.swing_clear(self.controller.target, self.raised(self.controller.target[3]), held):
+            return
+        grip, quat = self.ik.grip_pose(self.controller.target)
+        steps = int(round(RETRACT_RISE / RETRACT_STEP))
+        path = self.line(grip, grip + np.array([0.0, 0.0, RETRACT_RISE]), quat, steps=steps, partial=True)
+        up = []
+        for q in path:
+            if not self.clearance.clear(q, held=held):
+                break
+            up.append(q)
+            if self.swing_clear(q, self.raised(q[3]), held):
+                break
+        if up:
+            self.controller.move_through(up)
 
     def tucked(self) -> np.ndarray:
         """The tuck posture at the current base pose and torso height (at least the tuck's): the torso is the
@@ -196,7 +204,8 @@ class Arm:
         return lambda q: self.clearance.clear(q, held=held)
 
     def go_to_grasp(self, grasp: Grasp, pull: np.ndarray, entry: float, here_first: bool = False,
-                     direct: bool = False) -> tuple[list[np.ndarray], float] | None:
+                     direct: bool = False, rise: float = 0.0, held: Held | None = None
+                     ) -> tuple[list[np.ndarray], float] | None:
         """Drive (arm tucked) to a free base pose from which the way into `grasp` is reachable with the arm
         clear of the apartment: the grip `entry` m out along `pull` (a horizontal unit vector out of the
         furniture, shape (3,)) from the approach point, in along a straight line, the approach, and SIDE_LIFT m
@@ -205,7 +214,11 @@ class Arm:
         Base poses face the grasp along its approach, then, where the approach leans more than ASIDE_LEAN aside
         (see `rolled_grasps`), also into the furniture (against `pull`): beside it often no base pose is free.
         With `here_first`, where the robot stands is tried first; with `direct`, the arm may also swing straight
-        from the tuck (see `way_in`)."""
+        from the tuck (see `way_in`). `rise`: m the object must rise before it is drawn out (over what stands in
+        front of it, `rise_to_pass`): where it is more than SIDE_LIFT, that lift is tried first, the object (`held`,
+        as the grasp would hold it) checked clear of the compartment at its top, from every base pose; the others
+        where none reaches it (the neighbour's outline is a box round it: a trash bag drawn out low passed the can
+        beside it)."""
         quat = grasp.quat()
         above = grasp.position - grasp.approach * grasp.rotation[:, 0]
         obstacles = self.navigator.obstacles()
@@ -213,7 +226,8 @@ class Arm:
         candidates = self._grasp_bases(grasp, pull)
         lifts = (SIDE_LIFT, LOW_SIDE_LIFT) if np.linalg.norm(pull) > 0.0 else (SIDE_LIFT,)  # a shelf grasp's first leg
         free = self.navigator.radius + CLEARANCE
-        for base in [*here, *candidates]:
+        passes = [(rise,), lifts] if rise > SIDE_LIFT else [lifts]  # over what stands in front first, where it reaches
+        for lifts, base in [(heights, base) for heights in passes for base in [*here, *candidates]]:
             if base not in here and not self.navigator.plan.disk_is_free(base[0], base[1], free, obstacles):
                 continue
             q = self.tuck.copy()
@@ -222,8 +236,8 @@ class Arm:
             if not start.converged or not self.clearance.clear(start.q):
                 continue
             path = self.checked_line(start.q, [above + entry * pull, above], quat)
-            lift = None if path is None else next((h for h in lifts if self.checked_line(
-                path[-1], [above, grasp.position, grasp.position + np.array([0.0, 0.0, h])], quat) is not None), None)
+            lift = None if path is None else next((h for h in lifts if self._lift_clear(
+                path[-1], above, grasp, h, held if h > SIDE_LIFT else None)), None)
             if lift is None:
                 continue
             lead = self.way_in(base, start.q, above + entry * pull, quat, direct)
@@ -236,6 +250,14 @@ class Arm:
                 q_in[:3] = self.controller.target[:3]  # where the base really stopped
             return path_in, lift
         return None
+
+    def _lift_clear(self, q: np.ndarray, above: np.ndarray, grasp: Grasp, lift: float, held: Held | None) -> bool:
+        """Whether the arm, from configuration q (shape (13,)) at the approach point `above` (m), comes down onto
+        `grasp` and lifts `lift` m clear of the apartment, and `held` (if given, the object in the hand) is clear
+        there at the top (it rests on its shelf at the grasp)."""
+        top = grasp.position + np.array([0.0, 0.0, lift])
+        path = self.checked_line(q, [above, grasp.position, top], grasp.quat())
+        return path is not None and (held is None or self.clearance.clear(path[-1], held=held))
 
     def _grasp_bases(self, grasp: Grasp, pull: np.ndarray) -> list[tuple[float, float, float]]:
         """Base poses (x m, y m, yaw rad) to try for `grasp` (see `base_candidates`): facing it along its

@@ -116,6 +116,30 @@ class ClearanceCheck:
         touching = (checked[g1] != checked[g2]) & ~(robot[g1] & robot[g2]) & (d.contact.dist[: d.ncon] < self.MARGIN)
         return not touching.any()
 
+    def bodies_struck(self, q: np.ndarray, held: Held, bodies: frozenset[int], margin: float = 0.0) -> set[int]:
+        """Of `bodies` (body ids), those a robot geom other than a finger, or the `held` object, comes within
+        `margin` m of (0: touches) at configuration q (shape (13,)), `held` in the hand."""
+        d = self.scratch
+        d.qpos[:] = self.world.data.qpos
+        d.qpos[self.qpos_adr] = q
+        mujoco.mj_kinematics(self.model, d)
+        rotation = d.site_xmat[self.grip].reshape(3, 3)
+        d.qpos[held.qpos_adr:held.qpos_adr + 3] = d.site_xpos[self.grip] + rotation @ held.position
+        mujoco.mju_mat2Quat(d.qpos[held.qpos_adr + 3:held.qpos_adr + 7], (rotation @ held.rotation).ravel())
+        mujoco.mj_kinematics(self.model, d)
+        geoms = list(held.geoms)
+        mine = self.checked.copy()
+        mine[geoms] = True
+        self.model.geom_conaffinity[geoms] = self.conaffinity[geoms]
+        try:
+            mujoco.mj_collision(self.model, d)
+        finally:
+            self.model.geom_conaffinity[geoms] = 0
+        g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
+        near = d.contact.dist[: d.ncon] < margin
+        other = np.concatenate([g2[near & mine[g1] & ~self.robot[g2]], g1[near & mine[g2] & ~self.robot[g1]]])
+        return {int(b) for b in self.model.geom_bodyid[other]} & set(bodies)
+
 
 def _same_filter(model: mujoco.MjModel, robot: np.ndarray) -> bool:
     """Whether MuJoCo's contype/conaffinity test passes the same pairs (any geom that may be in or on the robot,

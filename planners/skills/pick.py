@@ -29,7 +29,7 @@ from planners.grasps.above import (
 from planners.grasps.candidate import Grasp, disturbed, ungraspable_reason
 from planners.grasps.features import hang_rotation
 from planners.grasps.geometry import matrix_to_quat
-from planners.grasps.neighbours import neighbour_footprints
+from planners.grasps.neighbours import neighbour_footprints, rise_to_pass
 from planners.grasps.ranking import rank_from_above
 from planners.grasps.shelf import shelf_grasps
 from planners.motion.arm import (
@@ -40,6 +40,7 @@ from planners.motion.arm import (
     SIDE_LIFT,
     Arm,
 )
+from planners.motion.clearance import Held
 from planners.motion.control import FREE_MOTION
 from planners.motion.navigation import NavigationError
 from planners.skills.parts import behind_a_door, covered_places, drawer_rim, shelves_inside
@@ -49,7 +50,9 @@ LIFT = 0.15  # m
 DRAWER_CLEARANCE = 0.03  # m an object lifted out of a drawer rises past the top of its front
 HOLD_SECONDS = 0.5
 # a side grasp lifts the object SIDE_LIFT m off its shelf (see planners.motion.arm),
-SIDE_PULL = 0.35  # m: then draws it this far out of the furniture,
+SIDE_PULL = 0.35  # m: then draws it this far out of the furniture (at least until it is OUT_PAST out of its front),
+OUT_PAST = 0.03  # m between the front plane and the object's outline once it is drawn out (a wine glass drawn
+# 0.35 m off the back of a rack was still in it when raised, struck the top's edge and fell out of the hand)
 SIDE_RAISE = 0.13  # m: then raises it this much more
 OPEN_ABOVE = 0.5  # m of free height above a place below which a grasp from above may not fit
 CLOSING_STEP = 0.005  # m per finger between the openings at which the fingers' way as they close is checked
@@ -249,12 +252,14 @@ class Pick:
     def _pick_from_shelf(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
                          out: np.ndarray | None = None, replan: bool = True) -> SkillResult:
         """Pick `name` from a shelf inside cabinet `node`: each grasp of `shelf_grasps` in turn, from a base
-        pose where the arm clears the compartment; the object lifted SIDE_LIFT m, drawn out, then raised.
+        pose where the arm clears the compartment; the object lifted SIDE_LIFT m (over what stands in front of it,
+        `rise_to_pass`), drawn out, then raised.
         With `out` (a horizontal unit vector, shape (2,)), from an open top instead, for a shelf next: the grasps a
         shelf takes (side grasps, the fingers as deep on the object as they reach, then pitched ones), approached
         against `out`. With `replan`, once a failed grasp has moved the object (see `disturbed`), the grasps are
         planned again for where it now stands (the others were for where it stood)."""
         grasps, out, front = self._shelf_candidates(name, node, cls, position, quat, out)
+        rise = rise_to_pass(self.world, name, position, out, front) if np.isfinite(front) else 0.0
         if not grasps:
             return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
         unreachable, failures = [], []
@@ -264,7 +269,8 @@ class Pick:
             if direct and grasp.kind not in unreachable:
                 continue
             try:
-                planned = self.arm.go_to_grasp(grasp, pull, max(front, 0.0) + ENTRY_OUT, direct=direct)
+                planned = self.arm.go_to_grasp(grasp, pull, max(front, 0.0) + ENTRY_OUT, direct=direct, rise=rise,
+                                               held=self._held_by(name, grasp))
             except NavigationError as error:
                 failures.append(f"{grasp.kind}: {error}")
                 continue
@@ -274,7 +280,8 @@ class Pick:
                 continue
             if direct:
                 unreachable.remove(grasp.kind)  # reached after all: its outcome is reported instead
-            outcome = self._try_grasp(name, grasp, pull=pull, path_in=planned[0], first_lift=planned[1])
+            outcome = self._try_grasp(name, grasp, pull=pull, path_in=planned[0], first_lift=planned[1],
+                                      drawn=max(SIDE_PULL, front + max(cls.size[:2]) / 2 + OUT_PAST))
             if outcome.success:
                 self.arm.held = name
                 return outcome
@@ -287,6 +294,14 @@ class Pick:
             failures.append(f"{', '.join(map(str, unreachable))}: no free base pose reaches the grasp without the arm "
                             f"touching {node} or its contents")
         return SkillResult(False, f"{name}: every grasp in {node} failed ({'; '.join(failures)})")
+
+    def _held_by(self, name: str, grasp: Grasp) -> Held:
+        """Object `name` as `grasp` would hold it (standing as it stands now), for clearance checks of its lift."""
+        model, body = self.world.model, self.world.object_body_ids[self.world.object_index(name)]
+        position, _ = self.world.object_pose(name)
+        return Held(frozenset(np.flatnonzero(model.geom_bodyid == body).tolist()),
+                    int(model.jnt_qposadr[model.body_jntadr[body]]), grasp.rotation.T @ (position - grasp.position),
+                    grasp.rotation.T @ self.world.data.xmat[body].reshape(3, 3))
 
     def _shelf_candidates(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
                           out: np.ndarray | None) -> tuple[list[Grasp], np.ndarray, float]:
@@ -305,10 +320,11 @@ class Pick:
         return grasps, out, -np.inf
 
     def _try_grasp(self, name: str, grasp: Grasp, pull: np.ndarray | None = None,
-                   path_in: list[np.ndarray] | None = None, first_lift: float = SIDE_LIFT) -> SkillResult:
+                   path_in: list[np.ndarray] | None = None, first_lift: float = SIDE_LIFT, drawn: float = SIDE_PULL
+                   ) -> SkillResult:
         """Approach along the grip x axis, close, lift: straight up LIFT m, or with `pull` (a horizontal unit
         vector out of the furniture, shape (3,)) up `first_lift` m (SIDE_LIFT unless the way in was checked only
-        with LOW_SIDE_LIFT), out SIDE_PULL m and up SIDE_RAISE m.
+        with LOW_SIDE_LIFT, or more over what stands in front), out `drawn` m and up SIDE_RAISE m.
         path_in: configurations (each shape (13,)) ending at the approach point, already checked; when None the
         approach configuration is solved here. Nothing moves where a closing finger would strike the furniture
         (see `_closing_clear`)."""
@@ -340,17 +356,17 @@ class Pick:
         if opening < MIN_HELD_OPENING:
             self._back_off(above, quat)
             return SkillResult(False, f"fingers closed on nothing (opening {opening * 1000:.1f} mm)")
-        return self._lift_and_hold(name, grasp, above, start, pull, first_lift)
+        return self._lift_and_hold(name, grasp, above, start, pull, first_lift, drawn)
 
     def _lift_and_hold(self, name: str, grasp: Grasp, above: np.ndarray, start: np.ndarray,
-                       pull: np.ndarray | None, first_lift: float) -> SkillResult:
+                       pull: np.ndarray | None, first_lift: float, drawn: float = SIDE_PULL) -> SkillResult:
         """With the fingers closed on `name` (which stood at `start`, m) at `grasp`, lift it as `_try_grasp`
         says, turn the hand until it hangs where the grasp asks for that, hold HOLD_SECONDS and check that it rose
         at least half as far as the hand; on failure back off to `above` (the approach point, m)."""
         quat = grasp.quat()
         up = np.array([0.0, 0.0, 1.0])
         if pull is not None:
-            legs = [first_lift * up, SIDE_PULL * pull, SIDE_RAISE * up]
+            legs = [first_lift * up, drawn * pull, SIDE_RAISE * up]
         else:
             legs = [LIFT * up]
         legs[-1] = legs[-1] + max(0.0, grasp.lift - sum(leg[2] for leg in legs)) * up  # raised further

@@ -21,7 +21,8 @@ from homer_sim.home.catalog import CATALOG
 from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
 from planners.grasps.geometry import axis_rotation, matrix_to_quat, yaw_matrix
-from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, PITCHED_HAND, SIDE_LIFT, Arm
+from planners.grasps.neighbours import rise_to_pass, tallest_beside
+from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, PITCHED_HAND, PULL_BASE_COST, SIDE_LIFT, Arm
 from planners.motion.clearance import ARC_BASE_COST, Held
 from planners.motion.control import CARRY_MOTION
 from planners.motion.navigation import CLEARANCE, NavigationError, base_candidates
@@ -46,6 +47,8 @@ SHELF_SPOT_GAP = 0.05  # m apart at least
 EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
 RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to let go (inside a shelf)
 TOP_RELEASE_OPENING = 0.05  # m per finger the fingers open at least to let go on an open top
+PASS_NEAR = 0.5  # m from its spot within which what stands on the surface is carried over (a can of wipes held
+# from the side at the carry point hung 5 cm above the stove and swept the 10 cm sauce pan 32 cm aside)
 
 
 class Place:
@@ -149,12 +152,14 @@ class Place:
 
     def _carry_to(self, name: str, node: str, target: np.ndarray) -> tuple[SkillResult | None, bool]:
         """Carry `name` to a base pose in front of furniture `node` facing `target` (m, the spot it goes to; see
-        `Arm.go_to`): (a failure if it could not or the object fell out of the hand on the way; whether the robot
-        stopped short with the object low)."""
+        `Arm.go_to`), held over what stands within PASS_NEAR of the spot: (a failure if it could not or the object
+        fell out of the hand on the way; whether the robot stopped short with the object low)."""
         held_at = self.arm.held_offset(name)  # where the object hangs in the hand (grip frame)
         size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        surface = target[2] - size[2] / 2  # the held object passes over what stands near its spot, too
         try:
-            short = self.arm.go_to(node, target[:2], surface_z=target[2] - size[2] / 2)
+            short = self.arm.go_to(node, target[:2], surface_z=tallest_beside(self.world, name, target, surface,
+                                                                              PASS_NEAR))
         except NavigationError as error:
             return SkillResult(False, f"place: {error}"), False
         return self._fell_out(name, held_at), short
@@ -174,7 +179,8 @@ class Place:
         """Lower the held `name` onto `target` (m) on furniture `node` from APPROACH m above, as it hangs in the
         hand (turned to stand it up, see `_lowering_rotations`), let go and retreat. Stopped `short` with the object
         low: first lift it over the surface, then drive in close (the object passes over the edge) and move it
-        across to above the spot in a straight line."""
+        across to above the spot in a straight line. Nothing is lowered where the arm or the object would come
+        down on another object (`_struck`)."""
         grip = self.world.data.site("robot/grip")
         now = grip.xmat.reshape(3, 3)
         offset = grip.xpos - self.world.object_pose(name)[0]  # where the object hangs from the hand now
@@ -191,17 +197,38 @@ class Place:
                                         self.controller.target.copy(), **CARRY_MOTION)
             except NavigationError:
                 pass  # reach from where it stands
-        if not self.arm.grip_line(above, quat):
+        over = self.arm.hand_line(above, quat, PULL_BASE_COST)
+        if over is None:
             pre = self.arm.solve(above, quat)
             if not pre.converged:
                 return SkillResult(False, f"place: {name} above {node} is {pre.reason}")
-            self.arm.reach(pre.q)
+            over = [pre.q]
+        struck = self._struck(name, over)
+        if struck:
+            return SkillResult(False, f"place: {name} on its way above {node} would strike {', '.join(struck)}")
+        if len(over) > 1:
+            self.controller.move_through(over)
+        else:
+            self.arm.reach(over[0])
         down = self.arm.line(above, release, quat)
         if down is None:
             return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
+        struck = self._struck(name, down)
+        if struck:
+            return SkillResult(False, f"place: lowering {name} onto {node} would strike {', '.join(struck)}")
         self.controller.move_through(down)
         self.controller.settle(0.003)
         return self._release_on(name, node, target, release, quat)
+
+    def _struck(self, name: str, path: list[np.ndarray]) -> list[str]:
+        """The objects other than the held `name` that the arm or `name` (as it hangs in the hand now) would touch
+        along `path` (configurations, each shape (13,)): a lowering no clear way was found for is not tried onto
+        them (a wrist came down on a sauce pan beside the spot and pushed it)."""
+        held = self.arm.held_object(name)
+        bodies = {int(b): n for n, b in zip(self.world.object_names, self.world.object_body_ids, strict=True)}
+        own = int(self.world.object_body_ids[self.world.object_index(name)])
+        struck = set().union(*(self.clearance.bodies_struck(q, held, frozenset(bodies) - {own}) for q in path))
+        return sorted(bodies[b] for b in struck)
 
     def _release_on(self, name: str, node: str, target: np.ndarray, release: np.ndarray, quat: np.ndarray
                     ) -> SkillResult:
@@ -329,8 +356,8 @@ class Place:
     def _place_in_shelf(self, name: str, node: str, places: list[int]) -> SkillResult:
         """Put the held object on a shelf inside cabinet `node` (`places`: its shelf indices), the reverse of
         `_pick_from_shelf`: from a base pose where the object and the arm clear the cabinet and its contents, in
-        SIDE_LIFT m above a free spot (spots nearest the front first, then those of each shelf none of those is on),
-        down, release, and straight out."""
+        SIDE_LIFT m (or over what stands in front of it, `rise_to_pass`) above a free spot (spots nearest the
+        front first, then those of each shelf none of those is on), down, release, and out the way it went in."""
         index = self.world.object_index(name)
         size = np.asarray(CATALOG[self.world.layout.objects[index].cls].size)
         furniture = self.navigator.furniture[node]
@@ -352,20 +379,24 @@ class Place:
         for spot in spots:
             release = np.array(spot.pos) + np.array([0.0, 0.0, 0.01]) - rotation @ held.position
             outside = release + (float(np.dot(front - release[:2], out)) + clear_out) * pull
-            points = [outside + SIDE_LIFT * up, release + SIDE_LIFT * up, release]
+            over = max(SIDE_LIFT, rise_to_pass(self.world, name, np.array(spot.pos), out,
+                                               float(np.dot(front - np.array(spot.pos[:2]), out))))
+            points = [outside + over * up, release + over * up, release]
             planned = self._drive_for(points, rotation, posture, held)
             if planned is None:
                 continue
-            return self._go_in(name, node, np.array(spot.pos), rotation, held, planned, release, outside)
+            return self._go_in(name, node, np.array(spot.pos), rotation, held, planned, release, outside, over)
         return SkillResult(False, f"place: no free base pose puts {name} into {node} without it or the arm "
                                   f"touching {node} or its contents ({len(spots)} spots tried)")
 
     def _go_in(self, name: str, node: str, spot: np.ndarray, rotation: np.ndarray, held: Held,
-               planned: tuple[list[np.ndarray], list[np.ndarray]], release: np.ndarray, outside: np.ndarray
-               ) -> SkillResult:
+               planned: tuple[list[np.ndarray], list[np.ndarray]], release: np.ndarray, outside: np.ndarray,
+               over: float = SIDE_LIFT) -> SkillResult:
         """Carry `held` (`name`) into cabinet `node` along `planned` (from `_drive_for`) and let it go on the
-        shelf at `spot` (m): eased in, aimed again where it turned in the fingers on the way (the grip site at
-        `release`, m, as planned, at `rotation`), down, released and drawn straight out to `outside` (m)."""
+        shelf at `spot` (m): eased in `over` m above the shelf, aimed again where it turned in the fingers on the
+        way (the grip site at `release`, m, as planned, at `rotation`), down, released and drawn out to `outside`
+        (m), straight, or, where it went in higher than SIDE_LIFT (over what stands in front), up that high
+        first."""
         quat, up = matrix_to_quat(rotation), np.array([0.0, 0.0, 1.0])
         ease, path_in = planned
         self._ease_to(ease, path_in[0])
@@ -375,8 +406,8 @@ class Place:
             return SkillResult(False, f"place: {name} fell out of the hand on the way into {node}")
         now = self.arm.held_object(name)  # the object may have turned in the fingers on the way: aim it again
         again = spot + np.array([0.0, 0.0, 0.01]) - rotation @ now.position
-        entry = outside + SIDE_LIFT * up
-        replanned = self.arm.checked_line(self.controller.target, [entry, again + SIDE_LIFT * up, again], quat, now)
+        entry = outside + over * up
+        replanned = self.arm.checked_line(self.controller.target, [entry, again + over * up, again], quat, now)
         slip = float(np.linalg.norm(now.position - held.position))
         if replanned is not None:
             path_in, release = [self.controller.target.copy(), *replanned], again
@@ -385,8 +416,12 @@ class Place:
                                       f"{node} and no longer goes in clear")
         self.controller.move_through(path_in[1:])
         self.controller.settle(0.003)
-        return self._let_go(name, node, self._held_opening() + RELEASE_OPENING,
-                            self.arm.line(release, outside, quat, steps=4, loose_end=True), inside=True)
+        away = self.arm.line(release, outside, quat, steps=4, loose_end=True)
+        if over > SIDE_LIFT:
+            up_first = self.arm.line(release, release + over * up, quat, loose_end=True)
+            away = None if up_first is None else up_first + (self.arm.line(
+                release + over * up, outside + over * up, quat, steps=4, loose_end=True, seed=up_first[-1]) or [])
+        return self._let_go(name, node, self._held_opening() + RELEASE_OPENING, away, inside=True)
 
     def _into_shelf(self, out: np.ndarray) -> np.ndarray:
         """The grip rotation (shape (3, 3)) that carries the held object into a shelf whose front faces `out`

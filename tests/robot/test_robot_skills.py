@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from homer_sim.graph import INSIDE, ON, RELATION_NAMES
 from homer_sim.home.catalog import CATALOG
@@ -187,3 +188,60 @@ def test_only_a_basin_has_a_rim_a_level_hand_meets() -> None:
     assert rims["sink_bathroom"] > BASIN_RIM and rims["sink_dining_room"] > BASIN_RIM
     assert 0.0 < rims["shower"] < BASIN_RIM  # its curb
     assert rims["table_dining_room"] == 0.0 and rims["kitchen_counter_left"] == 0.0
+
+
+def test_an_object_behind_another_on_a_shelf_must_rise_over_it_to_come_out() -> None:
+    """`rise_to_pass`: a glass behind the dishwasher's front cup must rise over the cup's top to be drawn out;
+    one beside the cup need not rise."""
+    from planners.grasps.neighbours import PASS_ABOVE, rise_to_pass
+
+    world = World(extras=[add_robot])
+    cup = world.object_pose("cup")[0]
+    cup_top = cup[2] + CATALOG["cup"].size[2] / 2
+    rack = cup[2] - CATALOG["cup"].size[2] / 2
+    glass = np.array([cup[0] + 0.02, cup[1] - 0.35, rack + CATALOG["drinking_glass"].size[2] / 2])
+    world.set_object_pose("drinking_glass", tuple(glass), (1.0, 0.0, 0.0, 0.0))
+    out = np.array([0.0, 1.0])  # the dishwasher's front faces north
+    assert abs(rise_to_pass(world, "drinking_glass", glass, out, 0.4) - (cup_top + PASS_ABOVE - rack)) < 1e-6
+    beside = glass + np.array([0.16, 0.0, 0.0])
+    world.set_object_pose("drinking_glass", tuple(beside), (1.0, 0.0, 0.0, 0.0))
+    assert rise_to_pass(world, "drinking_glass", beside, out, 0.4) == 0.0
+
+
+@pytest.mark.physics
+def test_a_wine_glass_behind_the_dishwashers_cup_comes_out_over_it_and_stays_in_the_hand() -> None:
+    """Drawn out 3 cm off the rack, the wine glass at the back took the cup in front of it along; drawn out the
+    fixed 0.35 m, it was still inside when raised, struck the top's edge and fell out of the hand."""
+    world = World(extras=[add_robot])
+    cup = world.object_pose("cup")[0]
+    rack = cup[2] - CATALOG["cup"].size[2] / 2
+    world.set_object_pose("wine_glass", (cup[0] + 0.03, 0.22, rack + CATALOG["wine_glass"].size[2] / 2 + 0.003),
+                          (1.0, 0.0, 0.0, 0.0))
+    world.settle()
+    robot = Robot(world, np.random.default_rng(0))
+    assert robot.observer.observe_all().parent_of("wine_glass") == "dishwasher"
+    opened = robot.open_articulation("dishwasher")
+    assert opened.success, opened.reason
+    before = world.object_positions()
+    picked = robot.pick("wine_glass", "dishwasher")
+    assert picked.success, picked.reason
+    robot.arm.carry()
+    world.step(500)
+    assert not robot.arm.hand_empty(), "the wine glass fell out of the hand"
+    drift, name = _others_moved(world, before, "wine_glass")
+    assert drift < 0.02, f"{name} moved {drift * 100:.1f} cm"
+
+
+def test_what_stands_near_a_spot_on_a_top_is_what_a_carried_object_must_pass_over() -> None:
+    """`tallest_beside`: near its spot on the stove the sauce pan's top, not the stove's surface, is the height a
+    carried object must pass over (a can of wipes carried 5 cm over the stove swept the pan 32 cm aside); far
+    from the pan, the surface."""
+    from planners.grasps.neighbours import tallest_beside
+
+    world = World(extras=[add_robot])
+    pan = world.object_pose("sauce_pan")[0]
+    surface = pan[2] - CATALOG["sauce_pan"].size[2] / 2
+    near = pan + np.array([-0.25, -0.1, 0.0])
+    assert abs(tallest_beside(world, "disinfectant_wipes", near, surface, 0.5) - (pan[2] + CATALOG["sauce_pan"].size[
+        2] / 2)) < 1e-6
+    assert tallest_beside(world, "disinfectant_wipes", pan + np.array([-0.8, 0.0, 0.0]), surface, 0.5) == surface
