@@ -21,7 +21,16 @@ from homer_sim.home.catalog import CATALOG
 from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
 from planners.grasps.geometry import axis_rotation, matrix_to_quat, yaw_matrix
-from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, PITCHED_HAND, SIDE_LIFT, Arm
+from planners.motion.arm import (
+    ENTRY_OUT,
+    GRASP_BASE_COST,
+    LEVEL_HAND,
+    PASS_OVER,
+    PITCHED_HAND,
+    PULL_BASE_COST,
+    SIDE_LIFT,
+    Arm,
+)
 from planners.motion.clearance import ARC_BASE_COST, Held
 from planners.motion.control import CARRY_MOTION
 from planners.motion.navigation import CLEARANCE, NavigationError, base_candidates
@@ -40,12 +49,16 @@ STOPPED_ABOVE = 0.02  # m above its spot a lowered object may stop before it cou
 SPOT_MISS = 0.05  # m beside its spot a lowered object may come down and still be let go (a loaf let go 16 cm
 # short of its spot, where the base met the counter, landed on a towel and fell over)
 DROP_HEIGHT = 0.05  # m above its spot a lowered object touching nothing but the robot is let fall at most
+DROP_INTO = 0.02  # m over a bin's rim a thing with no up (cloth) is let go to drop in: lowered to the basket's
+# floor, a dress hanging from its fold met the walls, and the arm reaching down there pushed the basket 14 cm
 SHELF_SPOTS = 6  # free spots tried for a place inside, nearest the front first, then half as many on each other
 # shelf (rack),
 SHELF_SPOT_GAP = 0.05  # m apart at least
 EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
 RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to let go (inside a shelf)
 TOP_RELEASE_OPENING = 0.05  # m per finger the fingers open at least to let go on an open top
+DRIVEN_TURNS = np.radians([0, 45, -45, 90, -90])  # rad off pointing at the spot a level hand is turned to, for
+# a lowering from a base pose chosen for it
 
 
 class Place:
@@ -86,7 +99,9 @@ class Place:
             if failure is not None:
                 return failure
             outcome = None if short else self._lower_checked(name, node, target)
-            if outcome is None:  # no clear way down from here: straight down from above the spot, unchecked
+            if outcome is None and not short:  # no clear way down from here: from a base pose chosen for it
+                outcome = self._lower_driven(name, node, target)
+            if outcome is None:  # no clear way down from any: straight down from above the spot, unchecked
                 outcome = self._lower_onto(name, node, target, short)
             if outcome.success or self.arm.held is None:
                 return outcome
@@ -118,15 +133,20 @@ class Place:
 
     def _place_on_object(self, name: str, node: str) -> SkillResult:
         """Put the held `name` on (into, for a bin) object `node`: centred over it, at the height it lands on what
-        is there (its top, its floor or the pile in it). An object the catalogue does not count as a support (a cd
-        player, a loaf) is tried too: whether the put-down object stays on it is for physics to say."""
+        is there (its top, its floor or the pile in it); a thing with no up (cloth) into a bin is let go just over
+        its rim and drops in. An object the catalogue does not count as a support (a cd player, a loaf) is tried
+        too: whether the put-down object stays on it is for physics to say."""
         cls = CATALOG[self.world.layout.objects[self.world.object_index(node)].cls]
         position = self.world.object_pose(node)[0]
         size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        rim = position[2] + cls.size[2] / 2
         try:
-            z = self.spots.landing_z(name, tuple(position[:2]), position[2] + cls.size[2] / 2 + size[2] + 0.05)
+            z = self.spots.landing_z(name, tuple(position[:2]), rim + size[2] + 0.05)
         except HomerError as error:
             return SkillResult(False, f"place: {error}")
+        family = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].family
+        if cls.is_container and family in NO_UP_FAMILIES:  # dropped in from over the rim (see DROP_INTO)
+            z = max(z, rim + size[2] / 2 + DROP_INTO)
         graph = self.observer.update()
         anchor = node
         while anchor in self.world.object_names and graph.parent_of(anchor):
@@ -191,7 +211,7 @@ class Place:
                                         self.controller.target.copy(), **CARRY_MOTION)
             except NavigationError:
                 pass  # reach from where it stands
-        if not self.arm.grip_line(above, quat):
+        if not self._over_the_spot(name, above, quat):
             pre = self.arm.solve(above, quat)
             if not pre.converged:
                 return SkillResult(False, f"place: {name} above {node} is {pre.reason}")
@@ -202,6 +222,19 @@ class Place:
         self.controller.move_through(down)
         self.controller.settle(0.003)
         return self._release_on(name, node, target, release, quat)
+
+    def _over_the_spot(self, name: str, above: np.ndarray, quat: np.ndarray) -> bool:
+        """Move the held `name` in a straight grip line to `above` (m, at `quat`): the base free to follow where the
+        arm and the object touch nothing on the way, else with the base held where that way is clear (following
+        the hand, the base drove 15 cm into the laundry basket a dress was to go in and pushed it 5 cm), else the
+        base free, unchecked; False (nothing moved) if the line leaves the arm's reach."""
+        held = self.arm.held_object(name)
+        for cost in (PULL_BASE_COST, GRASP_BASE_COST):
+            path = self.arm.hand_line(above, quat, cost)
+            if path is not None and all(self.clearance.clear(q, held=held) for q in path):
+                self.controller.move_through(path)
+                return True
+        return self.arm.grip_line(above, quat)
 
     def _release_on(self, name: str, node: str, target: np.ndarray, release: np.ndarray, quat: np.ndarray
                     ) -> SkillResult:
@@ -218,16 +251,32 @@ class Place:
         tilt = np.abs(self.world.data.xmat[self.world.object_body_ids[index]].reshape(3, 3)[2])
         low = float(self.world.object_pose(name)[0][2] - tilt @ size / 2)  # its lowest point (it may hang tilted)
         stopped = low - float(target[2] - size[2] / 2) - 0.01
-        if stopped > STOPPED_ABOVE and (stopped > DROP_HEIGHT or self._touches_apartment(name)):
+        family = CATALOG[self.world.layout.objects[index].cls].family
+        lies_in = family in NO_UP_FAMILIES and self._rests_only_on(name, node)
+        if stopped > STOPPED_ABOVE and not lies_in and (stopped > DROP_HEIGHT or self._touches_apartment(name)):
             self.arm.grip_line(release + np.array([0.0, 0.0, APPROACH]), quat)
             return SkillResult(False, f"place: {name} stopped {stopped * 100:.1f} cm above its spot on {node}")
         missed = float(np.linalg.norm(self.world.object_pose(name)[0][:2] - target[:2]))
-        if (missed > SPOT_MISS and node in self.navigator.furniture
-                and CATALOG[self.world.layout.objects[index].cls].family not in NO_UP_FAMILIES):
+        if missed > SPOT_MISS and node in self.navigator.furniture and family not in NO_UP_FAMILIES:
             self.arm.grip_line(release + np.array([0.0, 0.0, APPROACH]), quat)
             return SkillResult(False, f"place: {name} came down {missed * 100:.1f} cm beside its spot on {node}")
         opening = max(TOP_RELEASE_OPENING, self._held_opening() + RELEASE_OPENING)
         return self._let_go(name, node, opening, self._retreat(release, quat))
+
+    def _rests_only_on(self, name: str, node: str) -> bool:
+        """Whether object `name` touches something besides the robot now, and all of it is `node` or what lies on
+        or in `node` (a dress held by its fold hung down into the laundry basket and met its walls 10 cm above the
+        basket's floor: it is where it goes, let go there it stays in)."""
+        model, data, robot = self.world.model, self.world.data, self.clearance.robot
+        body = self.world.object_body_ids[self.world.object_index(name)]
+        g1, g2 = data.contact.geom1[:data.ncon], data.contact.geom2[:data.ncon]
+        others = np.concatenate([g2[(model.geom_bodyid[g1] == body) & ~robot[g2]],
+                                 g1[(model.geom_bodyid[g2] == body) & ~robot[g1]]])
+        if not len(others):
+            return False
+        graph = self.observer.update()
+        touched = {self.observer.nodes[n] if n >= 0 else "" for n in self.observer.geom_node[others]}
+        return all(t == node or graph.parent_of(t) == node for t in touched if t != name)
 
     def _touches_apartment(self, name: str) -> bool:
         """Whether object `name` touches anything but the robot now."""
@@ -258,6 +307,35 @@ class Place:
             self.controller.move_through(path)
             self.controller.settle(0.003)
             return self._release_on(name, node, target, release, quat)
+        return None
+
+    def _lower_driven(self, name: str, node: str, target: np.ndarray) -> SkillResult | None:
+        """`_lower_checked` from a base pose chosen for the lowering (`_drive_for`: the object eases from the carry
+        posture to APPROACH m above `target` and comes straight down, the arm and the object clear of the apartment
+        all the way), for where the carry stopped too far off to reach the spot that way (a counter whose spots lie
+        behind a cabinet beside it: moved over the spot unchecked, a toilet roll was knocked out of the fingers).
+        A hand not pointing down is turned about the vertical (the object keeps its up) to point from where the
+        robot stands towards the spot, then DRIVEN_TURNS off that: base poses are sought behind the hand, and
+        straight behind it there may be no room. None (the robot may have driven, the object still held) where
+        no base pose gives such a way."""
+        held, posture = self.arm.held_object(name), self.arm.carry()
+        here = self.controller.q()[:2]
+        toward = math.atan2(target[1] - here[1], target[0] - here[0])
+        for rotation in self._lowering_rotations(name):
+            pointing = rotation[:2, 0]
+            turns = [0.0] if np.linalg.norm(pointing) <= PITCHED_HAND else [
+                toward - math.atan2(pointing[1], pointing[0]) + float(t) for t in DRIVEN_TURNS]
+            for turn in turns:
+                turned = yaw_matrix(turn) @ rotation
+                release = target + np.array([0.0, 0.0, 0.01]) - turned @ held.position
+                planned = self._drive_for([release + np.array([0.0, 0.0, APPROACH]), release], turned, posture, held)
+                if planned is None:
+                    continue
+                ease, path = planned
+                self._ease_to(ease, path[0])
+                self.controller.move_through(path[1:])
+                self.controller.settle(0.003)
+                return self._release_on(name, node, target, release, matrix_to_quat(turned))
         return None
 
     def _lowering_rotations(self, name: str) -> list[np.ndarray]:
