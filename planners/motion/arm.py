@@ -319,7 +319,8 @@ class Arm:
         the way (the line may pass over what stands in front), else along the clear line that ends highest. A hand
         pointing behind the base's front (and not down) turns on the way about the vertical to point ahead of it:
         a later move into a shelf the base faces would swing the object past the base and knock it out of the
-        fingers. Otherwise the orientation is kept."""
+        fingers. Otherwise the orientation is kept. Where the straight line to the nearest carry point touches
+        something with an object in the hand, it is drawn out level first if that way is clear (`_drawn_out`)."""
         x, y, yaw = self.controller.target[:3]
         rotation = self.world.data.site("robot/grip").xmat.reshape(3, 3)
         ahead = np.array([np.cos(yaw), np.sin(yaw)])
@@ -332,12 +333,29 @@ class Arm:
         for k, reach in enumerate(CARRY_REACHES if level else CARRY_REACHES[:1]):
             point = np.array([x + reach * ahead[0], y + reach * ahead[1], carry_height])
             path = self.hand_line(point, matrix_to_quat(rotation), GRASP_BASE_COST, partial=True)
+            touching = 0 if held is None or k else sum(not self.clearance.clear(q, held=held) for q in path)
+            if touching:
+                path = self._drawn_out(point, matrix_to_quat(rotation), held, touching) or path
             end = self.ik.grip_pose(path[-1])[0][2] if path else -np.inf
             if end > height and (k == 0 or all(self.clearance.clear(q, held=held) for q in path)):
                 best, height = path, end
             if height > carry_height - WAYPOINT_TOL[0]:
                 break
         return best
+
+    def _drawn_out(self, point: np.ndarray, quat: np.ndarray, held: Held, touching: int) -> list[np.ndarray] | None:
+        """The way of the held object to the carry point `point` (m) at `quat` in two straight legs: level to above
+        or below it (out of the furniture, towards the base), then up or down to it (as far as the arm reaches),
+        if fewer than `touching` (those of the straight line) of its configurations touch anything; else None.
+        The straight line up and across dragged a cup picked from a dishwasher's rack along the underside of the
+        counter top over it, out of the fingers."""
+        grip = self.world.data.site("robot/grip").xpos
+        out = self.hand_line(np.array([point[0], point[1], grip[2]]), quat, GRASP_BASE_COST)
+        if out is None:
+            return None
+        up = self.hand_line(point, quat, GRASP_BASE_COST, partial=True, seed=out[-1]) or []
+        path = [*out, *up]
+        return path if sum(not self.clearance.clear(q, held=held) for q in path) < touching else None
 
     def _hang(self) -> float:
         """How far (m) the held object reaches below the grip site now, as it hangs (tilted) in the hand."""
