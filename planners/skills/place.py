@@ -463,8 +463,22 @@ class Place:
                                       f"{node} and no longer goes in clear")
         self.controller.move_through(path_in[1:])
         self.controller.settle(0.003)
-        return self._let_go(name, node, self._held_opening() + RELEASE_OPENING,
-                            self.arm.line(release, outside, quat, steps=4, loose_end=True), inside=True)
+        away = self._out_of_shelf(release, outside, quat)
+        return self._let_go(name, node, self._held_opening() + RELEASE_OPENING, away, inside=True)
+
+    def _out_of_shelf(self, release: np.ndarray, outside: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
+        """Configurations that draw the open hand from `release` (m) straight out to `outside` (m) at `quat`; a hand
+        pointing down first rises SIDE_LIFT m, as it came in, and goes out at that height: drawn out level at once,
+        its fingertips, still beside the object, dragged a pair of socks back out of the washing machine's drum."""
+        x = self.world.data.site("robot/grip").xmat.reshape(3, 3)[:, 0]
+        if np.linalg.norm(x[:2]) > PITCHED_HAND:
+            return self.arm.line(release, outside, quat, steps=4, loose_end=True)
+        lift = np.array([0.0, 0.0, SIDE_LIFT])
+        up = self.arm.line(release, release + lift, quat, steps=1)
+        if up is None:
+            return self.arm.line(release, outside, quat, steps=4, loose_end=True)
+        out = self.arm.line(release + lift, outside + lift, quat, steps=4, loose_end=True, seed=up[-1])
+        return up + out if out is not None else up
 
     def _into_shelf(self, out: np.ndarray) -> np.ndarray:
         """The grip rotation (shape (3, 3)) that carries the held object into a shelf whose front faces `out`
