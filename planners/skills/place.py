@@ -245,7 +245,11 @@ class Place:
         no edge to tip over: a vacuum cleaner held by its handle came down 5.1 cm beside its spot): then back up
         APPROACH m, still holding it. Where it stopped at most
         DROP_HEIGHT m above touching nothing but the robot (the arm reaches no lower: a vacuum cleaner held by its
-        handle 2.6-4 cm above the floor), it is let go there."""
+        handle 2.6-4 cm above the floor), it is let go there. Where the fingers met on the way down, the object is
+        no longer held (a laundry basket pinched by its rim slipped out as it touched the bed): nothing is backed up,
+        the hand opens and draws back and where it ended is read."""
+        if self.arm.hand_empty():
+            return self._let_go(name, node, TOP_RELEASE_OPENING, self._retreat(release, quat))
         index = self.world.object_index(name)
         size = np.asarray(CATALOG[self.world.layout.objects[index].cls].size)
         tilt = np.abs(self.world.data.xmat[self.world.object_body_ids[index]].reshape(3, 3)[2])
