@@ -187,3 +187,21 @@ def test_only_a_basin_has_a_rim_a_level_hand_meets() -> None:
     assert rims["sink_bathroom"] > BASIN_RIM and rims["sink_dining_room"] > BASIN_RIM
     assert 0.0 < rims["shower"] < BASIN_RIM  # its curb
     assert rims["table_dining_room"] == 0.0 and rims["kitchen_counter_left"] == 0.0
+
+
+def test_a_dress_is_dropped_into_the_laundry_basket_from_over_its_rim() -> None:
+    """Cloth into a bin on the floor is let go just over the rim and drops in: lowered to the basket's floor, a
+    dress hanging from its fold met the basket's walls 10 cm up and was backed out, and the arm reaching down (the
+    base following the hand) pushed the basket across the floor."""
+    world, robot = _scene("clothes_dress", (5.8, 7.62, 0.9 + 0.02 + 0.003), "dresser", seed=0)
+    before = world.object_positions()
+    picked = robot.pick("clothes_dress")
+    assert picked.success, picked.reason
+    placed = robot.place("basket_for_clothes")
+    assert placed.success, placed.reason
+    graph = robot.observer.update()
+    assert (graph.parent_of("clothes_dress"), graph.relation_of("clothes_dress")) == (
+        "basket_for_clothes", RELATION_NAMES[INSIDE])
+    drift, name = _others_moved(world, before, "clothes_dress")
+    assert drift < 0.02, f"{name} moved {drift * 100:.1f} cm"
+    assert world.warnings() == 0 and not world.has_nan()
