@@ -316,10 +316,11 @@ class Place:
     def _lower_driven(self, name: str, node: str, target: np.ndarray) -> SkillResult | None:
         """`_lower_checked` from a base pose chosen for the lowering (`_drive_for`: the object eases from the carry
         posture to APPROACH m above `target` and comes straight down, the arm and the object clear of the apartment
-        all the way), for where the carry stopped too far off to reach the spot that way (a counter whose spots lie
-        behind a cabinet beside it: moved over the spot unchecked, a toilet roll was knocked out of the fingers).
-        A hand not pointing down is turned about the vertical (the object keeps its up) to point from where the
-        robot stands towards the spot, then DRIVEN_TURNS off that: base poses are sought behind the hand, and
+        all the way), for where the carry stopped too far off to reach the spot that way (moved over the spot
+        unchecked, a toilet roll was knocked out of the fingers over the bathroom counter; there the bathroom
+        cabinet's open door, which the full hand cannot close, leaves no free base pose either). A hand not
+        pointing down is turned about the vertical (the object keeps its up) to point from where the robot stands
+        towards the spot, then DRIVEN_TURNS off that: base poses are sought behind the hand, and
         straight behind it there may be no room. None (the robot may have driven, the object still held) where
         no base pose gives such a way."""
         held, posture = self.arm.held_object(name), self.arm.carry()
