@@ -27,6 +27,9 @@ CARRY_REACHES = (0.35, 0.45, 0.55)  # m from the base centre to the carry point,
 # for a hand held level only, see `Arm.carry_path`)
 LEVEL_HAND = 0.7  # horizontal part of the grip x axis above which the hand counts as held level
 CARRY_HEIGHT = 1.05  # m
+CARRY_CLEAR = 0.95  # m: a held object is carried with its lowest point this high at least, where the arm reaches
+# (over counters, tables and dressers, 0.9 m at most): a dress hanging 35 cm from its fold, carried with the grip
+# at CARRY_HEIGHT, swept a jacket off the dresser and was caught on the oven on the way
 CARRY_ARM_SPEED = 0.2  # peak joint speed (fraction of the limit) moving a held object to the carry point: a wine
 # glass pinched at its rim slipped out of the fingers at SPEED_FRACTION
 CARRY_STEP = 0.05  # m between IK waypoints on the way to the carry point
@@ -182,13 +185,15 @@ class Arm:
             half_height = float(np.abs(self.world.data.xmat[body].reshape(3, 3)[2]) @ np.asarray(size) / 2)
             reach = self.held_reach()
             short = surface_z is not None and position[2] - half_height < surface_z + PASS_OVER
-            if short:  # the straight carry line stalled low: one IK solution lifts it clear, if there is one
+            if short:  # the carry stalled low: lifted straight up clear, as far as the arm reaches (one joint-space
+                # move there swung a dress held by its fold out of the fingers)
                 grip = self.world.data.site("robot/grip").xpos
                 lift = surface_z + PASS_OVER + half_height - position[2]
-                higher = self.solve(grip + np.array([0.0, 0.0, lift + 0.02]), self.grip_quat())
-                if higher.converged:
-                    self.controller.move_through([higher.q])
-                    posture = higher.q
+                higher = self.hand_line(grip + np.array([0.0, 0.0, lift + 0.02]), self.grip_quat(), GRASP_BASE_COST,
+                                        partial=True)
+                if higher:
+                    self.controller.move_through(higher, speed=CARRY_ARM_SPEED)
+                    posture = higher[-1]
                     position = self.world.object_pose(self.held)[0]
                     short = position[2] - half_height < surface_z + PASS_OVER
         self.navigator.drive_to(self.navigator.stand_pose(node, tuple(target_xy), reach if short else 0.0), posture,
@@ -345,14 +350,16 @@ class Arm:
 
     def carry_path(self) -> list[np.ndarray]:
         """Configurations (each shape (13,)) along a straight grip-site line from where the hand is to the carry
-        point CARRY_REACHES[0] m in front of the base at CARRY_HEIGHT m, stopped at the last reachable point; a
+        point CARRY_REACHES[0] m in front of the base at CARRY_HEIGHT m (higher where the held object hangs lower
+        than CARRY_CLEAR m then), stopped at the last reachable point; a
         joint-space move there could swing the held object down through the furniture or out of the fingers. A
         hand held level that stops short of that height (pointing ahead, it reaches no higher than 0.9 m there)
         goes to the first farther carry point it reaches instead, if the arm and the held object touch nothing on
         the way (the line may pass over what stands in front), else along the clear line that ends highest. A hand
         pointing behind the base's front (and not down) turns on the way about the vertical to point ahead of it:
         a later move into a shelf the base faces would swing the object past the base and knock it out of the
-        fingers. Otherwise the orientation is kept."""
+        fingers. Otherwise the orientation is kept. Where the straight line to the nearest carry point touches
+        something with an object in the hand, it is drawn out level first if that way is clear (`_drawn_out`)."""
         x, y, yaw = self.controller.target[:3]
         rotation = self.world.data.site("robot/grip").xmat.reshape(3, 3)
         ahead = np.array([np.cos(yaw), np.sin(yaw)])
@@ -360,16 +367,42 @@ class Arm:
             rotation = yaw_matrix(yaw - math.atan2(rotation[1, 0], rotation[0, 0])) @ rotation
         level = np.linalg.norm(rotation[:2, 0]) > LEVEL_HAND
         held = None if self.held is None else self.held_object(self.held)
+        carry_height = CARRY_HEIGHT if self.held is None else max(CARRY_HEIGHT, CARRY_CLEAR + self._hang())
         best, height = [self.controller.target.copy()], -np.inf
         for k, reach in enumerate(CARRY_REACHES if level else CARRY_REACHES[:1]):
-            point = np.array([x + reach * ahead[0], y + reach * ahead[1], CARRY_HEIGHT])
+            point = np.array([x + reach * ahead[0], y + reach * ahead[1], carry_height])
             path = self.hand_line(point, matrix_to_quat(rotation), GRASP_BASE_COST, partial=True)
+            touching = 0 if held is None or k else sum(not self.clearance.clear(q, held=held) for q in path)
+            if touching:
+                path = self._drawn_out(point, matrix_to_quat(rotation), held, touching) or path
             end = self.ik.grip_pose(path[-1])[0][2] if path else -np.inf
             if end > height and (k == 0 or all(self.clearance.clear(q, held=held) for q in path)):
                 best, height = path, end
-            if height > CARRY_HEIGHT - WAYPOINT_TOL[0]:
+            if height > carry_height - WAYPOINT_TOL[0]:
                 break
         return best
+
+    def _drawn_out(self, point: np.ndarray, quat: np.ndarray, held: Held, touching: int) -> list[np.ndarray] | None:
+        """The way of the held object to the carry point `point` (m) at `quat` in two straight legs: level to above
+        or below it (out of the furniture, towards the base), then up or down to it (as far as the arm reaches),
+        if fewer than `touching` (those of the straight line) of its configurations touch anything; else None.
+        The straight line up and across dragged a cup picked from a dishwasher's rack along the underside of the
+        counter top over it, out of the fingers."""
+        grip = self.world.data.site("robot/grip").xpos
+        out = self.hand_line(np.array([point[0], point[1], grip[2]]), quat, GRASP_BASE_COST)
+        if out is None:
+            return None
+        up = self.hand_line(point, quat, GRASP_BASE_COST, partial=True, seed=out[-1]) or []
+        path = [*out, *up]
+        return path if sum(not self.clearance.clear(q, held=held) for q in path) < touching else None
+
+    def _hang(self) -> float:
+        """How far (m) the held object reaches below the grip site now, as it hangs (tilted) in the hand."""
+        index = self.world.object_index(self.held)
+        size = np.asarray(CATALOG[self.world.layout.objects[index].cls].size)
+        body = self.world.object_body_ids[index]
+        low = self.world.object_pose(self.held)[0][2] - np.abs(self.world.data.xmat[body].reshape(3, 3)[2]) @ size / 2
+        return float(self.world.data.site("robot/grip").xpos[2] - low)
 
     def hand_line(self, point: np.ndarray, quat: np.ndarray, base_cost: float, partial: bool = False,
                    seed: np.ndarray | None = None) -> list[np.ndarray] | None:

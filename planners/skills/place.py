@@ -22,7 +22,16 @@ from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
 from planners.grasps.geometry import axis_rotation, matrix_to_quat, yaw_matrix
 from planners.grasps.neighbours import rise_to_pass, tallest_beside
-from planners.motion.arm import ENTRY_OUT, LEVEL_HAND, PASS_OVER, PITCHED_HAND, PULL_BASE_COST, SIDE_LIFT, Arm
+from planners.motion.arm import (
+    ENTRY_OUT,
+    GRASP_BASE_COST,
+    LEVEL_HAND,
+    PASS_OVER,
+    PITCHED_HAND,
+    PULL_BASE_COST,
+    SIDE_LIFT,
+    Arm,
+)
 from planners.motion.clearance import ARC_BASE_COST, Held
 from planners.motion.control import CARRY_MOTION
 from planners.motion.navigation import CLEARANCE, NavigationError, base_candidates
@@ -41,6 +50,8 @@ STOPPED_ABOVE = 0.02  # m above its spot a lowered object may stop before it cou
 SPOT_MISS = 0.05  # m beside its spot a lowered object may come down and still be let go (a loaf let go 16 cm
 # short of its spot, where the base met the counter, landed on a towel and fell over)
 DROP_HEIGHT = 0.05  # m above its spot a lowered object touching nothing but the robot is let fall at most
+DROP_INTO = 0.02  # m over a bin's rim a thing with no up (cloth) is let go to drop in: lowered to the basket's
+# floor, a dress hanging from its fold met the walls, and the arm reaching down there pushed the basket 14 cm
 SHELF_SPOTS = 6  # free spots tried for a place inside, nearest the front first, then half as many on each other
 # shelf (rack),
 SHELF_SPOT_GAP = 0.05  # m apart at least
@@ -49,6 +60,8 @@ RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to
 TOP_RELEASE_OPENING = 0.05  # m per finger the fingers open at least to let go on an open top
 PASS_NEAR = 0.5  # m from its spot within which what stands on the surface is carried over (a can of wipes held
 # from the side at the carry point hung 5 cm above the stove and swept the 10 cm sauce pan 32 cm aside)
+DRIVEN_TURNS = np.radians([0, 45, -45, 90, -90])  # rad off pointing at the spot a level hand is turned to, for
+# a lowering from a base pose chosen for it
 
 
 class Place:
@@ -89,7 +102,9 @@ class Place:
             if failure is not None:
                 return failure
             outcome = None if short else self._lower_checked(name, node, target)
-            if outcome is None:  # no clear way down from here: straight down from above the spot, unchecked
+            if outcome is None and not short:  # no clear way down from here: from a base pose chosen for it
+                outcome = self._lower_driven(name, node, target)
+            if outcome is None:  # no clear way down from any: straight down from above the spot, unchecked
                 outcome = self._lower_onto(name, node, target, short)
             if outcome.success or self.arm.held is None:
                 return outcome
@@ -121,15 +136,20 @@ class Place:
 
     def _place_on_object(self, name: str, node: str) -> SkillResult:
         """Put the held `name` on (into, for a bin) object `node`: centred over it, at the height it lands on what
-        is there (its top, its floor or the pile in it). An object the catalogue does not count as a support (a cd
-        player, a loaf) is tried too: whether the put-down object stays on it is for physics to say."""
+        is there (its top, its floor or the pile in it); a thing with no up (cloth) into a bin is let go just over
+        its rim and drops in. An object the catalogue does not count as a support (a cd player, a loaf) is tried
+        too: whether the put-down object stays on it is for physics to say."""
         cls = CATALOG[self.world.layout.objects[self.world.object_index(node)].cls]
         position = self.world.object_pose(node)[0]
         size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        rim = position[2] + cls.size[2] / 2
         try:
-            z = self.spots.landing_z(name, tuple(position[:2]), position[2] + cls.size[2] / 2 + size[2] + 0.05)
+            z = self.spots.landing_z(name, tuple(position[:2]), rim + size[2] + 0.05)
         except HomerError as error:
             return SkillResult(False, f"place: {error}")
+        family = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].family
+        if cls.is_container and family in NO_UP_FAMILIES:  # dropped in from over the rim (see DROP_INTO)
+            z = max(z, rim + size[2] / 2 + DROP_INTO)
         graph = self.observer.update()
         anchor = node
         while anchor in self.world.object_names and graph.parent_of(anchor):
@@ -197,7 +217,7 @@ class Place:
                                         self.controller.target.copy(), **CARRY_MOTION)
             except NavigationError:
                 pass  # reach from where it stands
-        over = self.arm.hand_line(above, quat, PULL_BASE_COST)
+        over = self._way_over(name, above, quat)
         if over is None:
             pre = self.arm.solve(above, quat)
             if not pre.converged:
@@ -230,6 +250,18 @@ class Place:
         struck = set().union(*(self.clearance.bodies_struck(q, held, frozenset(bodies) - {own}) for q in path))
         return sorted(bodies[b] for b in struck)
 
+    def _way_over(self, name: str, above: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
+        """Configurations of a straight grip line taking the held `name` to `above` (m, at `quat`): the base free to
+        follow where the arm and the object touch nothing on the way, else with the base held where that way is
+        clear (following the hand, the base drove 15 cm into the laundry basket a dress was to go in and pushed it
+        5 cm), else the base free, unchecked; None if the line leaves the arm's reach."""
+        held = self.arm.held_object(name)
+        for cost in (PULL_BASE_COST, GRASP_BASE_COST):
+            path = self.arm.hand_line(above, quat, cost)
+            if path is not None and all(self.clearance.clear(q, held=held) for q in path):
+                return path
+        return self.arm.hand_line(above, quat, PULL_BASE_COST)
+
     def _release_on(self, name: str, node: str, target: np.ndarray, release: np.ndarray, quat: np.ndarray
                     ) -> SkillResult:
         """With the held `name` lowered for `target` (m, its spot on `node`; the grip site at `release`, m, at
@@ -239,22 +271,42 @@ class Place:
         no edge to tip over: a vacuum cleaner held by its handle came down 5.1 cm beside its spot): then back up
         APPROACH m, still holding it. Where it stopped at most
         DROP_HEIGHT m above touching nothing but the robot (the arm reaches no lower: a vacuum cleaner held by its
-        handle 2.6-4 cm above the floor), it is let go there."""
+        handle 2.6-4 cm above the floor), it is let go there. Where the fingers met on the way down, the object is
+        no longer held (a laundry basket pinched by its rim slipped out as it touched the bed): nothing is backed up,
+        the hand opens and draws back and where it ended is read."""
+        if self.arm.hand_empty():
+            return self._let_go(name, node, TOP_RELEASE_OPENING, self._retreat(release, quat))
         index = self.world.object_index(name)
         size = np.asarray(CATALOG[self.world.layout.objects[index].cls].size)
         tilt = np.abs(self.world.data.xmat[self.world.object_body_ids[index]].reshape(3, 3)[2])
         low = float(self.world.object_pose(name)[0][2] - tilt @ size / 2)  # its lowest point (it may hang tilted)
         stopped = low - float(target[2] - size[2] / 2) - 0.01
-        if stopped > STOPPED_ABOVE and (stopped > DROP_HEIGHT or self._touches_apartment(name)):
+        family = CATALOG[self.world.layout.objects[index].cls].family
+        lies_in = family in NO_UP_FAMILIES and self._rests_only_on(name, node)
+        if stopped > STOPPED_ABOVE and not lies_in and (stopped > DROP_HEIGHT or self._touches_apartment(name)):
             self.arm.grip_line(release + np.array([0.0, 0.0, APPROACH]), quat)
             return SkillResult(False, f"place: {name} stopped {stopped * 100:.1f} cm above its spot on {node}")
         missed = float(np.linalg.norm(self.world.object_pose(name)[0][:2] - target[:2]))
-        if (missed > SPOT_MISS and node in self.navigator.furniture
-                and CATALOG[self.world.layout.objects[index].cls].family not in NO_UP_FAMILIES):
+        if missed > SPOT_MISS and node in self.navigator.furniture and family not in NO_UP_FAMILIES:
             self.arm.grip_line(release + np.array([0.0, 0.0, APPROACH]), quat)
             return SkillResult(False, f"place: {name} came down {missed * 100:.1f} cm beside its spot on {node}")
         opening = max(TOP_RELEASE_OPENING, self._held_opening() + RELEASE_OPENING)
         return self._let_go(name, node, opening, self._retreat(release, quat))
+
+    def _rests_only_on(self, name: str, node: str) -> bool:
+        """Whether object `name` touches something besides the robot now, and all of it is `node` or what lies on
+        or in `node` (a dress held by its fold hung down into the laundry basket and met its walls 10 cm above the
+        basket's floor: it is where it goes, let go there it stays in)."""
+        model, data, robot = self.world.model, self.world.data, self.clearance.robot
+        body = self.world.object_body_ids[self.world.object_index(name)]
+        g1, g2 = data.contact.geom1[:data.ncon], data.contact.geom2[:data.ncon]
+        others = np.concatenate([g2[(model.geom_bodyid[g1] == body) & ~robot[g2]],
+                                 g1[(model.geom_bodyid[g2] == body) & ~robot[g1]]])
+        if not len(others):
+            return False
+        graph = self.observer.update()
+        touched = {self.observer.nodes[n] if n >= 0 else "" for n in self.observer.geom_node[others]}
+        return all(t == node or graph.parent_of(t) == node for t in touched if t != name)
 
     def _touches_apartment(self, name: str) -> bool:
         """Whether object `name` touches anything but the robot now."""
@@ -285,6 +337,36 @@ class Place:
             self.controller.move_through(path)
             self.controller.settle(0.003)
             return self._release_on(name, node, target, release, quat)
+        return None
+
+    def _lower_driven(self, name: str, node: str, target: np.ndarray) -> SkillResult | None:
+        """`_lower_checked` from a base pose chosen for the lowering (`_drive_for`: the object eases from the carry
+        posture to APPROACH m above `target` and comes straight down, the arm and the object clear of the apartment
+        all the way), for where the carry stopped too far off to reach the spot that way (moved over the spot
+        unchecked, a toilet roll was knocked out of the fingers over the bathroom counter; there the bathroom
+        cabinet's open door, which the full hand cannot close, leaves no free base pose either). A hand not
+        pointing down is turned about the vertical (the object keeps its up) to point from where the robot stands
+        towards the spot, then DRIVEN_TURNS off that: base poses are sought behind the hand, and
+        straight behind it there may be no room. None (the robot may have driven, the object still held) where
+        no base pose gives such a way."""
+        held, posture = self.arm.held_object(name), self.arm.carry()
+        here = self.controller.q()[:2]
+        toward = math.atan2(target[1] - here[1], target[0] - here[0])
+        for rotation in self._lowering_rotations(name):
+            pointing = rotation[:2, 0]
+            turns = [0.0] if np.linalg.norm(pointing) <= PITCHED_HAND else [
+                toward - math.atan2(pointing[1], pointing[0]) + float(t) for t in DRIVEN_TURNS]
+            for turn in turns:
+                turned = yaw_matrix(turn) @ rotation
+                release = target + np.array([0.0, 0.0, 0.01]) - turned @ held.position
+                planned = self._drive_for([release + np.array([0.0, 0.0, APPROACH]), release], turned, posture, held)
+                if planned is None:
+                    continue
+                ease, path = planned
+                self._ease_to(ease, path[0])
+                self.controller.move_through(path[1:])
+                self.controller.settle(0.003)
+                return self._release_on(name, node, target, release, matrix_to_quat(turned))
         return None
 
     def _lowering_rotations(self, name: str) -> list[np.ndarray]:
@@ -416,12 +498,25 @@ class Place:
                                       f"{node} and no longer goes in clear")
         self.controller.move_through(path_in[1:])
         self.controller.settle(0.003)
-        away = self.arm.line(release, outside, quat, steps=4, loose_end=True)
-        if over > SIDE_LIFT:
-            up_first = self.arm.line(release, release + over * up, quat, loose_end=True)
-            away = None if up_first is None else up_first + (self.arm.line(
-                release + over * up, outside + over * up, quat, steps=4, loose_end=True, seed=up_first[-1]) or [])
+        away = self._out_of_shelf(release, outside, quat, over)
         return self._let_go(name, node, self._held_opening() + RELEASE_OPENING, away, inside=True)
+
+    def _out_of_shelf(self, release: np.ndarray, outside: np.ndarray, quat: np.ndarray, over: float = SIDE_LIFT
+                      ) -> list[np.ndarray] | None:
+        """Configurations that draw the open hand from `release` (m) straight out to `outside` (m) at `quat`: first
+        up `over` m where it went in higher than SIDE_LIFT (over what stands in front; None if it cannot rise), else
+        a hand pointing down first rises SIDE_LIFT m, as it came in, and goes out at that height (drawn out level at
+        once, its fingertips, still beside the object, dragged a pair of socks back out of the washing machine's
+        drum)."""
+        x = self.world.data.site("robot/grip").xmat.reshape(3, 3)[:, 0]
+        if over <= SIDE_LIFT and np.linalg.norm(x[:2]) > PITCHED_HAND:
+            return self.arm.line(release, outside, quat, steps=4, loose_end=True)
+        lift = np.array([0.0, 0.0, max(over, SIDE_LIFT)])
+        up = self.arm.line(release, release + lift, quat, loose_end=True)
+        if up is None:
+            return None if over > SIDE_LIFT else self.arm.line(release, outside, quat, steps=4, loose_end=True)
+        out = self.arm.line(release + lift, outside + lift, quat, steps=4, loose_end=True, seed=up[-1])
+        return up + out if out is not None else up
 
     def _into_shelf(self, out: np.ndarray) -> np.ndarray:
         """The grip rotation (shape (3, 3)) that carries the held object into a shelf whose front faces `out`

@@ -7,6 +7,7 @@ import json
 import os
 import shutil
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -63,6 +64,39 @@ def test_exclusions_name_outside_and_ungraspable_objects() -> None:
     assert exclusion_reason(Occurrence("plate", "cupboard", "sink_dining_room", "h", 0, 1.0), "plate").startswith(
         "not graspable: 26 cm across")
     assert exclusion_reason(Occurrence("bowl", "cupboard", "sink_dining_room", "h", 0, 1.0), "bowl") is None
+
+
+def test_the_start_state_is_looked_for_over_the_whole_day_before_the_move() -> None:
+    # Household b's headset: taken from the desk at 09:10, worn at every snapshot until it was put on the pen at
+    # 11:42. It rested on its source last after the person's action before they took it, 2.5 h before the move;
+    # the day is lived again up to there and the world let come to rest before the robot acts.
+    from planners.suites.relocation_suite import Bench, _Stop
+
+    events = [(540.0, "sit at the desk"), (550.0, "take the headset"), (640.0, "walk"), (702.29, "put it down")]
+
+    class Lived:
+        def __init__(self) -> None:
+            self.index, self.stopped, self.settled = -1, [], []
+            self.world = SimpleNamespace(settle=lambda max_seconds: self.settled.append(self.index))
+
+        def _on_source(self, occurrence: Occurrence) -> bool:
+            return self.index == 0  # on the desk only until it is taken
+
+        def _live(self, occurrence: Occurrence, day, after_action) -> None:
+            try:
+                for self.index in range(len(events)):
+                    after_action(self.index, events)
+            except _Stop:
+                self.stopped.append(self.index)
+
+    lived = Lived()
+    headset = Occurrence("headset", "desk_home_office", "pen", "household_b", 1, 702.29)
+    assert Bench._before_the_move(lived, headset, day=None) is None
+    assert lived.stopped == [2, 0] and lived.settled == [0]  # watched up to the move, then lived to the action
+
+    lived = Lived()
+    never = Occurrence("headset", "desk_home_office", "pen", "household_b", 1, 535.0)  # before any action
+    assert "after no action of the day before the move" in Bench._before_the_move(lived, never, day=None)
 
 
 def test_displaced_lists_what_moved_beyond_the_limit(world: World) -> None:
