@@ -281,5 +281,8 @@ def psi(graph: SceneGraph, movable: np.ndarray, rollout: Rollout, *, threshold: 
         return held or (f"the person is at {busy[0]}" if busy else None) or excluded(r.obj)
 
     plan = plan_relocations(graph, movable, passed, containers, skip, already_open)
-    low = tuple((r, f"confidence {r.confidence:.2f} below the threshold {threshold:.2f}") for r in below)
+    held = holds.reason if holds is not None else lambda obj: None  # a held object is left for that, not the
+    # threshold (the predictor is asked about it back at its source, so its argmax "moves" it there)
+    low = tuple((r, held(r.obj) or f"confidence {r.confidence:.2f} below the threshold {threshold:.2f}")
+                for r in below)
     return Plan(plan.relocations, plan.skipped + low, plan.steps)

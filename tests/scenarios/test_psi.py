@@ -133,6 +133,8 @@ def test_held_objects_stay_until_the_person_moves_them_or_the_window_passes() ->
     back = _rollout(on_table, {"bowl": [("cupboard", 0.9)] * 3})
     plan = _plan(on_table, back, holds=holds)
     assert plan.relocations == () and "held on table" in plan.skipped[0][1]
+    (low, reason), = _plan(on_table, back, holds=holds, threshold=0.95).skipped  # below the threshold, but held
+    assert low.obj == "bowl" and reason.startswith("held on table")
     assert holds.update(on_table, minute=440.0) == []  # still on the table, window not over
     released = holds.update(on_table, minute=451.0)  # the window passed: the robot may put it back
     assert [h.obj for h in released] == ["bowl"] and [r.obj for r in _plan(on_table, back, holds=holds).relocations] \
