@@ -187,10 +187,10 @@ class SceneGraphObserver:
     def _lowest(self, k: int) -> float:
         """The height (m) of movable k's lowest point: the lowest corner of its colliding geoms' bounding boxes."""
         geoms, data = self.object_geoms[k], self.world.data
-        rows = data.geom_xmat[geoms].reshape(-1, 3, 3)[:, 2]  # each geom's local axes' world heights
-        aabb = self.world.model.geom_aabb[geoms]  # (G, 6): box centre and half sizes in the geom's frame
         if not len(geoms):
             return -np.inf
+        rows = data.geom_xmat[geoms].reshape(-1, 3, 3)[:, 2]  # each geom's local axes' world heights
+        aabb = self.world.model.geom_aabb[geoms]  # (G, 6): box centre and half sizes in the geom's frame
         low = (data.geom_xpos[geoms, 2] + np.einsum("gj,gj->g", rows, aabb[:, :3])
                - np.einsum("gj,gj->g", np.abs(rows), aabb[:, 3:]))
         return float(low.min())
