@@ -150,52 +150,87 @@ def find_path(blocked: np.ndarray, plan: FloorPlan, start: tuple[float, float], 
 
 
 def _nearest_free(grid: np.ndarray, plan: FloorPlan, xy: tuple[float, float]) -> tuple[int, int] | None:
+    """The free cell nearest to the cell of `xy` within 0.5 m (squared cell distance; on a tie, the first in
+    (i, j) order), or None."""
     i, j = plan.cell(*xy)
     reach = int(np.ceil(0.5 / plan.resolution))
-    best, best_d = None, None
-    for di in range(-reach, reach + 1):
-        for dj in range(-reach, reach + 1):
-            a, b = i + di, j + dj
-            if 0 <= a < grid.shape[0] and 0 <= b < grid.shape[1] and not grid[a, b]:
-                d = di * di + dj * dj
-                if best_d is None or d < best_d:
-                    best, best_d = (a, b), d
-    return best
+    i0, j0 = max(i - reach, 0), max(j - reach, 0)
+    i1, j1 = min(i + reach + 1, grid.shape[0]), min(j + reach + 1, grid.shape[1])
+    if i0 >= i1 or j0 >= j1:
+        return None
+    di, dj = np.arange(i0, i1)[:, None] - i, np.arange(j0, j1)[None, :] - j
+    d = np.where(grid[i0:i1, j0:j1], np.iinfo(np.int64).max, di * di + dj * dj)
+    k = int(np.argmin(d))  # the first minimum in row-major order, as a loop over (di, dj) keeps it
+    a, b = divmod(k, j1 - j0)
+    return None if grid[i0 + a, j0 + b] else (i0 + a, j0 + b)
+
+
+_DIAGONAL = 2 ** 0.5
+_FREE_CACHE: dict[tuple, list[bool]] = {}  # grid shape and bytes -> its padded, flattened free cells
+_FREE_CACHE_SIZE = 8
+
+
+def _padded_free(grid: np.ndarray) -> list[bool]:
+    """The free cells of `grid` padded with one blocked cell on every side, flattened into a list (fast to index);
+    kept for the last few grids by content, so a grid changed in place is never served stale."""
+    key = (grid.shape, grid.tobytes())
+    free = _FREE_CACHE.pop(key, None)
+    if free is None:
+        free = (~np.pad(grid, 1, constant_values=True)).ravel().tolist()
+        while len(_FREE_CACHE) >= _FREE_CACHE_SIZE:
+            del _FREE_CACHE[next(iter(_FREE_CACHE))]  # the least recently used
+    _FREE_CACHE[key] = free
+    return free
 
 
 def _astar(grid: np.ndarray, start: tuple[int, int], goal: tuple[int, int], penalty: np.ndarray | None = None,
            penalty_cost: float = 0.0) -> list[tuple[int, int]] | None:
+    """8-connected A* with the octile distance, no corner cutting. Cells are flat indices into the grid padded
+    with one blocked cell on every side (so no bounds checks); a flat index orders cells as their (i, j) tuples
+    do, so ties on the heap break as they would on cell tuples."""
+    width = grid.shape[1] + 2
+    free = _padded_free(grid)
+    pen = np.pad(penalty, 1).ravel().tolist() if penalty is not None else None
+    penalized = 1.0 + penalty_cost
+    # (offset, step length, offsets of the two cells a diagonal step must not cut; the step's own if straight)
+    moves = ((width, 1.0, width, width), (-width, 1.0, -width, -width), (1, 1.0, 1, 1), (-1, 1.0, -1, -1),
+             (width + 1, _DIAGONAL, width, 1), (width - 1, _DIAGONAL, width, -1),
+             (-width + 1, _DIAGONAL, -width, 1), (-width - 1, _DIAGONAL, -width, -1))
+    gi, gj = goal[0] + 1, goal[1] + 1
+    source = (start[0] + 1) * width + start[1] + 1
+    target = gi * width + gj
+    diagonal_extra = _DIAGONAL - 1
 
-    diagonal = 2 ** 0.5
-    moves = [(1, 0, 1.0), (-1, 0, 1.0), (0, 1, 1.0), (0, -1, 1.0),
-             (1, 1, diagonal), (1, -1, diagonal), (-1, 1, diagonal), (-1, -1, diagonal)]
+    def heuristic(c: int) -> float:  # octile distance to the goal
+        dx, dy = abs(c // width - gi), abs(c % width - gj)
+        return max(dx, dy) + diagonal_extra * min(dx, dy)
 
-    def heuristic(c: tuple[int, int]) -> float:
-        dx, dy = abs(c[0] - goal[0]), abs(c[1] - goal[1])
-        return max(dx, dy) + (diagonal - 1) * min(dx, dy)
-
-    came: dict[tuple[int, int], tuple[int, int]] = {}
-    cost = {start: 0.0}
-    frontier = [(heuristic(start), start)]
-    n, m = grid.shape
+    inf = float("inf")
+    cost = [inf] * len(free)
+    cost[source] = 0.0
+    came: dict[int, int] = {}
+    frontier = [(heuristic(source), source, 0.0)]  # (f, cell, cost when pushed)
+    pop, push = heapq.heappop, heapq.heappush
     while frontier:
-        _, cell = heapq.heappop(frontier)
-        if cell == goal:
+        _, cell, pushed = pop(frontier)
+        if cell == target:
             path = [cell]
             while cell in came:
                 cell = came[cell]
                 path.append(cell)
-            return path[::-1]
-        for di, dj, step in moves:
-            nxt = (cell[0] + di, cell[1] + dj)
-            if not (0 <= nxt[0] < n and 0 <= nxt[1] < m) or grid[nxt]:
+            return [(c // width - 1, c % width - 1) for c in reversed(path)]
+        here = cost[cell]
+        if pushed > here:
+            continue  # stale: the entry at the present cost came off the heap first, expanding again changes nothing
+        for offset, step, a, b in moves:
+            nxt = cell + offset
+            if not free[nxt] or not free[cell + a] or not free[cell + b]:
                 continue
-            if di and dj and (grid[cell[0] + di, cell[1]] or grid[cell[0], cell[1] + dj]):
-                continue  # no corner cutting
-            new = cost[cell] + (step * (1.0 + penalty_cost) if penalty is not None and penalty[nxt] else step)
-            if new < cost.get(nxt, np.inf):
-                cost[nxt], came[nxt] = new, cell
-                heapq.heappush(frontier, (new + heuristic(nxt), nxt))
+            new = here + (step * penalized if pen is not None and pen[nxt] else step)
+            if new < cost[nxt]:
+                cost[nxt] = new
+                came[nxt] = cell
+                push(frontier, (new + heuristic(nxt), nxt, new))
     return None
 
 
