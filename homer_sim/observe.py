@@ -52,9 +52,10 @@ class SceneGraphObserver:
         self.categories = world.declared_graph().categories
         index = {name: i for i, name in enumerate(self.nodes)}
         roots = model.body_rootid
-        body_node = np.array([index.get(model.body(int(roots[b])).name, -1) for b in range(model.nbody)])
-        # A geom belongs to the node of its root body; one on the world body (floors, furniture without parts)
-        # to the node its name begins with, and walls ("wall/<k>") to none.
+        body_node = np.array([index.get(model.body(int(roots[b])).name.split("/")[0], -1) for b in range(model.nbody)])
+        # A geom belongs to the node its root body's name begins with (an object; a door or drawer, as
+        # "<furniture>/<part>"); one on the world body (floors, furniture) to the node its name begins with, and
+        # walls ("wall/<k>") to none.
         self.geom_node = np.array([index.get(model.geom(g).name.split("/")[0], -1) if model.geom_bodyid[g] == 0
                                    else body_node[model.geom_bodyid[g]] for g in range(model.ngeom)])
         self.movable = np.array([index[n] for n in world.object_names], dtype=np.int32)

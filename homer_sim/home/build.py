@@ -2,15 +2,15 @@
 
 Naming (the one place MJCF names are made; `homer_sim.observe` and `homer_sim.world` read them back):
 - a room's floor: world geom `<room>/floor`; walls: world geoms `wall/<k>`;
-- furniture with doors or drawers: body `<furniture>` with geoms `<furniture>/<box>`; a door or drawer: body
-  and joint `<furniture>/<part>`, its handle geom and site `<furniture>/<part>/handle`;
-- furniture without parts: world geoms `<furniture>/<box>`, posed in the world frame;
-- interior volumes: sites `<furniture>/interior_<k>` on the body that carries them (the world body for
-  furniture without parts);
+- furniture: world geoms `<furniture>/<box>`, posed in the world frame; a door or drawer: a child body of the
+  world and joint `<furniture>/<part>`, its handle geom and site `<furniture>/<part>/handle`;
+- interior volumes: sites `<furniture>/interior_<k>` on the body that carries them (a part's, or the world's);
 - objects: body `<object>` with a free joint `<object>` and geoms `<object>/<part>`.
 
-What never moves lives on the world body: MuJoCo's broadphase cost grows with the number of bodies, even
-when they all sleep, so a static body per floor and per table would cost every step. A geom's owner is the
+What never moves lives on the world body: MuJoCo's broadphase cost grows with the number of bodies and of their
+geoms, even when they all sleep, so a static body per floor, per table or per cabinet would cost every step. A
+door or drawer never touches the world body's geoms (its own carcass is excluded; the layout validator keeps its
+swing or travel clear of other furniture); it touches objects, the robot and other parts. A geom's owner is the
 name before its first '/' (see `homer_sim.observe`).
 """
 
@@ -94,9 +94,11 @@ def _add_floors_and_walls(spec: mujoco.MjSpec, layout: Layout) -> None:
     spec.worldbody.add_light(name="sun", pos=(5, 4, 6), dir=(0, 0, -1), type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL)
 
 
-def _add_part(spec: mujoco.MjSpec, body: mujoco.MjsBody, f: Furniture, part: Part) -> mujoco.MjsBody:
+def _add_part(spec: mujoco.MjSpec, frame: Pose, f: Furniture, part: Part) -> mujoco.MjsBody:
+    """A door or drawer of `f` (posed at `frame`) hanging from the world body by its joint."""
     name = f"{f.name}/{part.name}"
-    child = body.add_body(name=name, pos=part.anchor)
+    pos, quat = _in_body(frame, part.anchor)
+    child = spec.worldbody.add_body(name=name, pos=pos, quat=quat)
     jtype = mujoco.mjtJoint.mjJNT_HINGE if part.joint == "hinge" else mujoco.mjtJoint.mjJNT_SLIDE
     child.add_joint(name=name, type=jtype, axis=part.axis, range=part.range, limited=True,
                     damping=part.damping, armature=0.01, frictionloss=0.05)
@@ -107,26 +109,22 @@ def _add_part(spec: mujoco.MjSpec, body: mujoco.MjsBody, f: Furniture, part: Par
     _add_box(child, f"{name}/handle", part.handle, density)
     child.add_site(name=f"{name}/handle", pos=part.handle.center, size=(0.01, 0.01, 0.01),
                    type=mujoco.mjtGeom.mjGEOM_SPHERE, rgba=(1, 0, 0, 0), group=VOLUME_GROUP)
-    spec.add_exclude(bodyname1=f.name, bodyname2=name)
+    spec.add_exclude(bodyname1="world", bodyname2=name)  # its carcass is on the world body (see above)
     return child
 
 
 def _add_furniture(spec: mujoco.MjSpec, layout: Layout, f: Furniture) -> None:
     geometry = furniture_geometry(f)
     pose = (np.array([f.pos[0], f.pos[1], base_height(layout, f)]), np.array(yaw_quat(f.yaw)))
-    if geometry.parts:  # parts need a body to hang from and to exclude contacts with
-        body, frame = spec.worldbody.add_body(name=f.name, pos=pose[0], quat=pose[1]), None
-    else:  # fused into the world body
-        body, frame = spec.worldbody, pose
     for box in geometry.boxes:
-        _add_box(body, f"{f.name}/{box.name}", box, frame=frame)
-    parts = {part.name: _add_part(spec, body, f, part) for part in geometry.parts}
+        _add_box(spec.worldbody, f"{f.name}/{box.name}", box, frame=pose)
+    parts = {part.name: _add_part(spec, pose, f, part) for part in geometry.parts}
     for k, volume in enumerate(geometry.volumes):
-        holder, center = body, np.array(volume.center)
-        if volume.part is not None:  # furniture with parts has a body: frame is None
+        if volume.part is None:
+            holder, (pos, quat) = spec.worldbody, _in_body(pose, volume.center)
+        else:  # in the part's own frame
             part = next(p for p in geometry.parts if p.name == volume.part)
-            holder, center = parts[volume.part], center - np.array(part.anchor)
-        pos, quat = _in_body(frame, center)
+            holder, (pos, quat) = parts[volume.part], _in_body(None, np.array(volume.center) - np.array(part.anchor))
         holder.add_site(name=f"{f.name}/interior_{k}", type=mujoco.mjtGeom.mjGEOM_BOX, pos=pos, quat=quat,
                         size=volume.half, rgba=(0.2, 0.6, 1.0, 0.0), group=VOLUME_GROUP)
 

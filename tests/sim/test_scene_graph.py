@@ -57,14 +57,18 @@ def test_object_on_the_floor_is_inside_its_room(fresh) -> None:
 
 
 def test_furniture_on_the_world_body_keeps_its_parent(fresh) -> None:
-    """Floors and furniture without doors or drawers are fused into the world body; their geoms still name
-    their node, and the ray from a fused piece's base passes its own geoms to what it stands on: the open bays of
-    the coffee maker end on the solid counter's top, where a ray from just past them starts inside the counter and
-    stops level with the floor's top."""
+    """Floors and furniture are fused into the world body (a door or drawer hangs from it on its joint); their
+    geoms still name their node, a door's geoms its furniture's, and the ray from a fused piece's base passes its
+    own geoms to what it stands on: the open bays of the coffee maker end on the solid counter's top, where a ray
+    from just past them starts inside the counter and stops level with the floor's top."""
     world, observer = fresh
     model = world.model
     assert model.geom("coffe_maker/bottom").bodyid == 0 and model.geom("dining_room/floor").bodyid == 0
-    assert model.geom("cupboard/back").bodyid == model.body("cupboard").id  # its doors hang from a body
+    assert model.geom("cupboard/back").bodyid == 0
+    door = model.geom("cupboard/door/door")
+    assert model.body_parentid[door.bodyid] == 0 and door.bodyid != 0
+    assert observer.geom_node[door.id] == observer.geom_node[model.geom("cupboard/back").id] \
+        == world.layout.node_names().index("cupboard")
     graph = observer.graph
     assert _relation(graph, "coffe_maker") == ("kitchen_counter_left", "ON")
     assert _relation(graph, "kitchen_counter_left") == ("dining_room", "INSIDE")
