@@ -7,6 +7,7 @@ their current physical poses (never from the layout's declared ones).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -189,8 +190,8 @@ class Spots:
             candidates = _packing_order(f, near, xs, ys, half_x, half_y, place.center[1] if f.kind == "cabinet"
                                         else None)
         else:
-            candidates = drawn + [(x, y) for x in np.arange(xs[0], xs[1] + 1e-9, 0.02)
-                                  for y in np.arange(ys[0], ys[1] + 1e-9, 0.02)]
+            grid = ((x, y) for x in np.arange(xs[0], xs[1] + 1e-9, 0.02) for y in np.arange(ys[0], ys[1] + 1e-9, 0.02))
+            candidates = itertools.chain(drawn, grid)  # the grid made only as far as it is tried
         for x, y in candidates:
             rect = (x - half_x, y - half_y, x + half_x, y + half_y)
             if across and not self._ends_clear(rect, footprint(f)):
@@ -277,7 +278,8 @@ def _packing_order(f, near: np.ndarray, xs: tuple[float, float], ys: tuple[float
     else:
         free = np.ones(len(gx), dtype=bool)
     order = np.lexsort((width, -depth) if centre is None else (width, np.round(np.abs(width - centre), 3), -depth))
-    return [(float(gx[k]), float(gy[k])) for k in order if free[k]]
+    order = order[free[order]]
+    return list(zip(gx[order].tolist(), gy[order].tolist(), strict=True))
 
 
 def _footprint_rect(f) -> tuple[float, float, float, float]:
