@@ -3,9 +3,9 @@
 Never from the layout: the observer looks at `MjData` (body poses, contacts, rays against geoms, interior
 volume sites) and names what it finds with the node that owns each geom or site. The one exception is where
 furniture stands, which never changes: furniture is fused into the world body (only its doors and drawers have
-bodies; see `homer_sim.home.build`), so it has no body pose to read. It keeps the graph incrementally: `update()` re-observes only bodies that
-moved since they were last observed and have come to rest, so sleeping bodies cost one vectorised pose
-comparison.
+bodies; see `homer_sim.home.build`), so it has no body pose to read. It keeps the graph incrementally:
+`update()` re-observes only bodies that moved since they were last observed and have come to rest, so sleeping
+bodies cost one vectorised pose comparison.
 """
 
 from __future__ import annotations
