@@ -42,9 +42,15 @@ class TimedMarkov(Predictor):
         """Count (object, from, to, target slot) transitions; add a zero-count stay triple for every (object, from)."""
         data = transitions(fit_days)
         rows = np.flatnonzero(self.movable)
-        obj = np.broadcast_to(rows, data.parent[:, rows].shape).ravel()
-        src, dst = data.parent[:, rows].ravel(), data.target[:, rows].ravel()
-        slot = np.repeat(self._slot(data.minute_next), len(rows))
+        self.count(data.parent[:, rows], data.target[:, rows], data.minute_next)
+
+    def count(self, parent: np.ndarray, target: np.ndarray, minute_next: np.ndarray) -> None:
+        """Fit on transitions of the movable objects: parent and target Shape (S, M) (columns in node order of the
+        movable objects), minute_next Shape (S,) the minute of each target."""
+        rows = np.flatnonzero(self.movable)
+        obj = np.broadcast_to(rows, parent.shape).ravel()
+        src, dst = np.asarray(parent, dtype=np.int64).ravel(), np.asarray(target, dtype=np.int64).ravel()
+        slot = np.repeat(self._slot(minute_next), len(rows))
         stay = np.unique(np.stack([obj, src], axis=1), axis=0)
         keys = np.concatenate([np.stack([obj, src, dst], axis=1), np.column_stack([stay, stay[:, 1]])])
         self.triples, inverse = np.unique(keys, axis=0, return_inverse=True)

@@ -52,15 +52,16 @@ def test_the_arrangement_tells_which_routine_is_under_way() -> None:
 
 
 def test_checkpoint_round_trip_gives_the_same_forecast(tmp_path: Path) -> None:
-    predictor = Analogs(META, sigma_min=10.0, similarity=0.5, stay_prior=0.02, threshold=0.3)
+    predictor = Analogs(META, sigma_min=10.0, similarity=0.5, stay_prior=0.02, backoff=0.5, threshold=0.3)
     predictor.method = "analogs"
     predictor.fit([_day(i) for i in range(5)], [])
     path = save_predictor(tmp_path / "analogs.pt", predictor, {"note": "toy"})
     loaded, info = load_predictor(path, META)
     assert info == {"note": "toy"} and loaded.params == predictor.params
     for cup, minute in ((TABLE, 600), (SHELF, 470), (TABLE, 1430)):
-        np.testing.assert_array_equal(loaded.forecast(*_query(cup, minute)[0], minute, 6),
-                                      predictor.forecast(*_query(cup, minute)[0], minute, 6))
+        for name in ("parent", "confidence", "other", "other_confidence"):  # the chain backoff is rebuilt too
+            np.testing.assert_array_equal(getattr(loaded.rollout(*_query(cup, minute), 6), name),
+                                          getattr(predictor.rollout(*_query(cup, minute), 6), name))
 
 
 def test_tuning_holds_each_validation_day_out_of_its_fit_then_fits_all_days() -> None:
@@ -77,3 +78,26 @@ def test_tuning_holds_each_validation_day_out_of_its_fit_then_fits_all_days() ->
     assert len(predictor.states) == sum(d.steps for d in days)
     # The routine is foreseen on days the folds never stored: the objective there is well above nothing predicted.
     assert info["tunings"]["paper@30"]["val_score"] > 50.0
+
+
+
+def test_the_chain_backoff_foresees_a_move_in_an_arrangement_never_seen() -> None:
+    # A book that always sat on the shelf lies on the table: no stored step resembles that arrangement, and with a
+    # high lambda the analogs count for nothing, so alone they keep the bowl in place. The chain has seen the bowl
+    # leave the shelf at 08:10 on every day, whatever the book: the backoff gives that move weight.
+    meta = DatasetMeta((*META.nodes, "book"), (*META.categories, "object"), (*META.movable, True), ("h",))
+    book = 5
+    days = []
+    for i in range(0, 8, 2):
+        day = _day(i)
+        days.append(Day("h", "train", i, day.minutes, np.column_stack([day.parent, np.full(len(MINUTES), SHELF)]),
+                        np.column_stack([day.relation, np.ones(len(MINUTES), np.int8)])))
+    query = np.array([[-1, 0, 0, TABLE, SHELF, TABLE]]), np.array([480.0])  # 08:00, cup out, book on the table
+    confidence = {}
+    for backoff in (0.0, 1.0):
+        predictor = Analogs(meta, sigma_min=10.0, similarity=20.0, stay_prior=0.1, backoff=backoff)
+        predictor.fit(days, [])
+        out = predictor.rollout(*query, 2)
+        assert out.parent[1, 0, book] == TABLE
+        confidence[backoff] = float(out.other_confidence[1, 0, BOWL]) if out.other[1, 0, BOWL] == TABLE else 0.0
+    assert confidence[0.0] < 0.01 and confidence[1.0] > 0.05
