@@ -233,22 +233,46 @@ class Place:
         down = self.arm.line(above, release, quat)
         if down is None:
             return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
-        struck = self._struck(name, down)
+        struck = self._struck(name, down, onto=node if node in self.world.object_names else None)
         if struck:
             return SkillResult(False, f"place: lowering {name} onto {node} would strike {', '.join(struck)}")
         self.controller.move_through(down)
         self.controller.settle(0.003)
         return self._release_on(name, node, target, release, quat)
 
-    def _struck(self, name: str, path: list[np.ndarray]) -> list[str]:
-        """The objects other than the held `name` that the arm or `name` (as it hangs in the hand now) would touch
-        along `path` (configurations, each shape (13,)): a lowering no clear way was found for is not tried onto
-        them (a wrist came down on a sauce pan beside the spot and pushed it)."""
+    def _struck(self, name: str, path: list[np.ndarray], onto: str | None = None) -> list[str]:
+        """The objects other than the held `name`, what rides in or on it (`_riders`) and the object `onto` (the
+        one it is lowered onto) that the arm or `name` (as it hangs in the hand now) would touch along `path`
+        (configurations, each shape (13,)): a lowering no clear way was found for is not tried onto them (a wrist
+        came down on a sauce pan beside the spot and pushed it). The riders stay where they are in the check
+        while the held object moves, so they would count as struck (a bin with a newspaper in it); a lowering
+        onto an object ends touching it."""
         held = self.arm.held_object(name)
         bodies = {int(b): n for n, b in zip(self.world.object_names, self.world.object_body_ids, strict=True)}
-        own = int(self.world.object_body_ids[self.world.object_index(name)])
-        struck = set().union(*(self.clearance.bodies_struck(q, held, frozenset(bodies) - {own}) for q in path))
+        skip = {name, onto, *self._riders(name)}
+        checked = frozenset(b for b, n in bodies.items() if n not in skip)
+        struck = set().union(*(self.clearance.bodies_struck(q, held, checked) for q in path))
         return sorted(bodies[b] for b in struck)
+
+    def _riders(self, name: str) -> set[str]:
+        """The objects that rest (through others) on or in `name` in the observed scene graph, or whose centre lies
+        inside its box (a newspaper in a bin the graph puts the bin on)."""
+        graph = self.observer.update()
+        index = self.world.object_index(name)
+        centre = self.world.object_pose(name)[0]
+        rotation = self.world.data.xmat[self.world.object_body_ids[index]].reshape(3, 3)
+        half = np.asarray(CATALOG[self.world.layout.objects[index].cls].size) / 2
+        riders = set()
+        for other in self.world.object_names:
+            if other == name:
+                continue
+            parent = graph.parent_of(other)
+            while parent and parent != name:
+                parent = graph.parent_of(parent)
+            local = rotation.T @ (self.world.object_pose(other)[0] - centre)
+            if parent == name or bool(np.all(np.abs(local) <= half)):
+                riders.add(other)
+        return riders
 
     def _way_over(self, name: str, above: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
         """Configurations of a straight grip line taking the held `name` to `above` (m, at `quat`): the base free to
