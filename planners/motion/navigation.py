@@ -41,6 +41,7 @@ CARRY_TURN = 0.6  # m of path over which a base carrying an object turns from it
 SWEEP_STEP = 0.05  # m between the configurations of a carry checked for touching (`Navigator.drive_to`)
 HEADING_STEP = 0.15  # m between the points of a carry whose headings are the way ahead (`_carry_poses`)
 TURN_BACK = 0.5  # m a base carrying an object backs up at most to turn on the spot clear of everything
+TURN_ALONG = 2.0  # m along its way a base carrying an object may keep its heading before it turns to face ahead
 IN_THE_WAY = "someone is in the way"  # ends a navigation failure that only `Navigator.others` caused
 
 
@@ -295,12 +296,21 @@ class Navigator:
                 points = [ahead[0], *ahead[1:-1][::WAYPOINT_STRIDE], ahead[-1]]
                 ways.insert(0, (_carry_poses(points, yaw0, goal, first, last),
                                 [tuple(q0[:2]), *ahead, tuple(goal[:2])]))
+                if clear is not None and first is None:  # or turned on the way, where that touches nothing
+                    ways[1:1] = [(poses, ways[0][1]) for poses in _turned_on_the_way(points, yaw0, goal, last)]
         if clear is not None and reach > self.radius + CLEARANCE:  # also: the heading kept, turned at the end
             along = np.cumsum(np.hypot(*np.diff(np.asarray([tuple(q0[:2]), *keep]), axis=0).T))
             ends = np.clip((along - along[-1] + CARRY_TURN) / CARRY_TURN, 0.0, 1.0)
             ways.append(([(x, y, yaw0 + dyaw * float(f)) for (x, y), f in zip(keep, ends, strict=True)], path))
         if clear is not None and len(ways) > 1:
-            ways.sort(key=lambda way: self._touches(q0, tuck, way[0], reach, clear))
+            best = None
+            for way in ways:  # the first that touches nothing, else the one that touches least often
+                touches = self._touches(q0, tuck, way[0], reach, clear)
+                if best is None or touches < best[0]:
+                    best = (touches, way)
+                if touches == 0:
+                    break
+            ways = [best[1]]
         poses, path = ways[0]
         waypoints = []
         for pose in poses:
@@ -375,6 +385,23 @@ def _carry_poses(points: list[tuple[float, float]], yaw0: float, goal: tuple[flo
         previous = previous + _wrap(yaw - previous)
         unwrapped.append((float(x), float(y), previous))
     return unwrapped
+
+
+def _turned_on_the_way(points: list[tuple[float, float]], yaw0: float, goal: tuple[float, float, float],
+                       last: tuple | None) -> list[list[tuple[float, float, float]]]:
+    """Base poses (x m, y m, yaw rad) along `points` (as for `_carry_poses`) for a base at heading `yaw0` that keeps
+    its heading to one of the points within TURN_ALONG m along the way, turns on the spot there to face the way
+    ahead, and goes on as `_carry_poses` from there: one list per such point, nearest first. A base with an object
+    held out in front that turned where it started swept it into the bed it had picked it beside, and one that kept
+    its heading carried a laundry basket sideways into a door frame."""
+    ways, along = [], 0.0
+    for k in range(1, len(points) - 1):
+        along += math.dist(points[k - 1], points[k])
+        if along > TURN_ALONG:
+            break
+        kept = [(float(x), float(y), yaw0) for x, y in points[1:k + 1]]
+        ways.append(kept + _carry_poses(points[k:], yaw0, goal, (points[k], True), last)[1:])
+    return ways
 
 
 def base_candidates(grip_pos: np.ndarray, grip_rot: np.ndarray, previous_xy: np.ndarray | None,
