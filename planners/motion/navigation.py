@@ -9,13 +9,14 @@ base follows them with the arm tucked, through `Controller`.
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Callable
 
 import numpy as np
 
 from homer_sim.errors import HomerError
 from homer_sim.home.catalog import CATALOG
-from homer_sim.home.floorplan import find_path, floor_plan, inflate, path_length
+from homer_sim.home.floorplan import _nearest_free, find_path, floor_plan, inflate, path_length
 from homer_sim.home.furniture import local_to_world
 from homer_sim.home.placement import base_height
 from homer_sim.home.validate import access_sides
@@ -189,6 +190,38 @@ class Navigator:
             raise self._failure(f"no path from {np.round(start, 2).tolist()} to {np.round(goal[:2], 2).tolist()}",
                                 blocked)
         return path
+
+    def clear_of(self, points: np.ndarray, distance: float) -> tuple[float, float, float] | None:
+        """The base pose (x m, y m, current yaw) nearest along the floor to the base's position, reachable from it
+        and at least `distance` m from every one of `points` (shape (k, 2), m, world): where to wait out of the
+        way of someone walking through them. The base's own position if it is already; None if no free cell
+        reachable from it is."""
+        points = np.asarray(points, dtype=float).reshape(-1, 2)
+        still, others, _ = self._grids(0.0)
+        grid = self.blocked | still | others
+        q = self.controller.q()
+        xs, ys = self.plan.cell_centers(0, grid.shape[0], 0, grid.shape[1])
+        far = np.ones_like(grid)
+        for x, y in points:
+            far &= np.hypot(xs - x, ys - y) >= distance
+        if all(math.hypot(q[0] - x, q[1] - y) >= distance for x, y in points):
+            return float(q[0]), float(q[1]), float(q[2])
+        start = _nearest_free(grid, self.plan, (float(q[0]), float(q[1])))
+        if start is None:
+            return None
+        seen = np.zeros_like(grid)
+        seen[start] = True
+        frontier = deque([start])
+        while frontier:  # breadth first: the nearest such cell in steps over the grid
+            cell = frontier.popleft()
+            if far[cell]:
+                return float(xs[cell]), float(ys[cell]), float(q[2])
+            for di, dj in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+                nxt = (cell[0] + di, cell[1] + dj)
+                if 0 <= nxt[0] < grid.shape[0] and 0 <= nxt[1] < grid.shape[1] and not grid[nxt] and not seen[nxt]:
+                    seen[nxt] = True
+                    frontier.append(nxt)
+        return None
 
     def _grids(self, reach: float) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """(still, others, near) grids (shape of `blocked`) of a base whose held object sticks out `reach` m:

@@ -221,3 +221,30 @@ def test_a_put_down_packs_against_what_is_there(executor: Executor) -> None:
     pot, pan = world.object_pose("cookingpot")[0], world.object_pose("fryingpan")[0]
     assert front - pot[1] < CATALOG["cookingpot"].size[1] / 2 + 0.06  # in the front row
     assert pan[1] < pot[1]  # the front row was full: the pan went behind
+
+
+def test_a_walk_only_something_in_the_way_blocks_asks_it_to_make_way(executor: Executor) -> None:
+    """Where only `dynamic_obstacles` (the robot) block every way, the walker asks `make_way` and plans again: a
+    robot left standing in a doorway had ended the person's day with "no path"."""
+    walker, avatar = executor.walker, executor.avatar
+    avatar.move_to(3.0, 1.0, 0.0)
+    blocked = {"all": True}
+    everything = np.ones_like(executor.spots.blocked)
+
+    def cells():
+        return everything if blocked["all"] else np.zeros_like(everything)
+
+    def make_way(path) -> bool:
+        assert len(path) >= 2
+        blocked["all"] = False
+        return True
+
+    try:
+        walker.dynamic_obstacles, walker.make_way = cells, None
+        with pytest.raises(AvatarError, match="no path"):
+            walker.walk_to(4.0, 1.0, 0.0)
+        walker.make_way = make_way
+        walker.walk_to(4.0, 1.0, 0.0)
+        assert (avatar.x, avatar.y) == (4.0, 1.0)
+    finally:
+        walker.dynamic_obstacles, walker.make_way = None, None
