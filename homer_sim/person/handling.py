@@ -355,7 +355,7 @@ class Handling:
         """A spot on (or in) object `target`, above whatever already lies there."""
         pos = self.world.object_pose(target)[0]
         x, y = pos[:2] + self.day.rng.uniform(-0.01, 0.01, size=2)
-        z = self.spots.landing_z(name, (x, y), pos[2] + self._cls(target).size[2] / 2 + 0.3)
+        z = self.spots.landing_in(name, target, (x, y), pos[2] + self._cls(target).size[2] / 2 + 0.3)
         return Spot((float(x), float(y), z), 0.0, target, None)
 
     def _put_on_furniture(self, name: str, target: str, relation: int | None, exclude: set[int]) -> None:

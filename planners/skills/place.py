@@ -144,7 +144,7 @@ class Place:
         size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
         rim = position[2] + cls.size[2] / 2
         try:
-            z = self.spots.landing_z(name, tuple(position[:2]), rim + size[2] + 0.05)
+            z = self.spots.landing_in(name, node, tuple(position[:2]), rim + size[2] + 0.05)
         except HomerError as error:
             return SkillResult(False, f"place: {error}")
         family = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].family

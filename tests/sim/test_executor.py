@@ -248,3 +248,24 @@ def test_a_walk_only_something_in_the_way_blocks_asks_it_to_make_way(executor: E
         assert (avatar.x, avatar.y) == (4.0, 1.0)
     finally:
         walker.dynamic_obstacles, walker.make_way = None, None
+
+
+def test_a_newspaper_put_into_a_bin_too_narrow_for_it_lies_across_the_rim_and_stays(executor: Executor) -> None:
+    """A flat thing wider than a bin's opening is put down across its rim (`Spots.landing_in`), the mail (which
+    fits) inside: set into the bin at the mail's height, the newspaper went into the walls, was pushed through the
+    bin's floor or knocked the bin over, and the pile crept on for minutes."""
+    world = executor.world
+    for seed in (2, 7):  # the newspaper under the bin, the bin knocked over
+        executor.start_day(np.random.default_rng(seed))
+        for name in ("mail", "newspaper"):
+            executor.grab(name)
+            executor.put(name, "trashcan", None)
+        graph = executor.observe()
+        assert graph.parent_of("mail") == "trashcan" and graph.parent_of("newspaper") == "trashcan"
+        body = world.object_body_ids[world.object_index("trashcan")]
+        assert world.data.xmat[body][8] > 0.99  # upright
+        rim = world.object_pose("trashcan")[0][2] + CATALOG["trashcan"].size[2] / 2
+        assert world.object_pose("newspaper")[0][2] > rim
+        before = world.object_positions()
+        world.step(int(10.0 / world.model.opt.timestep))
+        assert np.max(np.linalg.norm(world.object_positions() - before, axis=1)) < 0.005
