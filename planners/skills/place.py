@@ -241,23 +241,27 @@ class Place:
         return self._release_on(name, node, target, release, quat)
 
     def _struck(self, name: str, path: list[np.ndarray], onto: str | None = None) -> list[str]:
-        """The objects other than the held `name`, what rides in or on it (`_riders`) and the object `onto` (the
-        one it is lowered onto) that the arm or `name` (as it hangs in the hand now) would touch along `path`
-        (configurations, each shape (13,)): a lowering no clear way was found for is not tried onto them (a wrist
-        came down on a sauce pan beside the spot and pushed it). The riders stay where they are in the check
-        while the held object moves, so they would count as struck (a bin with a newspaper in it); a lowering
-        onto an object ends touching it."""
+        """The objects that the arm or the held `name` (as it hangs in the hand now) would touch along `path`
+        (configurations, each shape (13,)), but `name`, what rides in or on it (`_riders`), the object `onto` it is
+        lowered onto and the objects that one lies on: a lowering no clear way was found for is not tried onto
+        them (a wrist came down on a sauce pan beside the spot and pushed it). The riders stay where they are in
+        the check while the held object moves, so they would count as struck (a bin with a newspaper in it); a
+        lowering onto an object ends touching it, and a bin wider than the mail it goes onto touches the
+        newspaper under the mail too."""
         held = self.arm.held_object(name)
         bodies = {int(b): n for n, b in zip(self.world.object_names, self.world.object_body_ids, strict=True)}
-        skip = {name, onto, *self._riders(name)}
+        graph = self.observer.update()
+        skip = {name, *self._riders(name, graph)}
+        while onto in self.world.object_names:  # the object it goes onto and the pile that one lies on
+            skip.add(onto)
+            onto = graph.parent_of(onto)
         checked = frozenset(b for b, n in bodies.items() if n not in skip)
         struck = set().union(*(self.clearance.bodies_struck(q, held, checked) for q in path))
         return sorted(bodies[b] for b in struck)
 
-    def _riders(self, name: str) -> set[str]:
+    def _riders(self, name: str, graph) -> set[str]:
         """The objects that rest (through others) on or in `name` in the observed scene graph, or whose centre lies
-        inside its box (a newspaper in a bin the graph puts the bin on)."""
-        graph = self.observer.update()
+        inside its box (a newspaper in a bin the graph puts the bin on); `graph`: the observed scene graph."""
         index = self.world.object_index(name)
         centre = self.world.object_pose(name)[0]
         rotation = self.world.data.xmat[self.world.object_body_ids[index]].reshape(3, 3)

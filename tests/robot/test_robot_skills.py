@@ -281,6 +281,6 @@ def test_a_lowering_may_touch_what_it_goes_onto_and_what_rides_in_the_held_objec
     assert robot.observer.update().parent_of("mail") == "trashcan"
     path = [robot.controller.target.copy()]  # the bin as it stands, "held" where it is
     place = robot._place
-    assert "mail" in place._riders("trashcan")
+    assert "mail" in place._riders("trashcan", robot.observer.update())
     assert place._struck("trashcan", path) == ["newspaper"]  # it stands on it
     assert place._struck("trashcan", path, onto="newspaper") == []
