@@ -244,14 +244,18 @@ class Helper:
 
     def _put_down(self, obj: str, source: str) -> None:
         """After a failed place: put the held object back where it came from, else on the nearest furniture
-        with a top (at most FALLBACK_PLACES tries)."""
+        with a top (at most FALLBACK_PLACES tries), else on the floor of the room the robot is in: a robot left
+        holding it stops its plans and cannot make way for the person (`make_way`)."""
         x, y = self.robot.controller.q()[:2]
         tops = sorted((np.hypot(f.pos[0] - x, f.pos[1] - y), f.name) for f in self.world.layout.furniture
                       if f.name not in self.containers and self.robot.spots.places_of(f.name, ON))
-        for node in [source, *(name for _, name in tops)][:FALLBACK_PLACES]:
-            if node in self.robot.navigator.furniture and self.robot.place(node).success:
+        room = self.world.layout.room_at(x, y)
+        for node in [*[source, *(name for _, name in tops)][:FALLBACK_PLACES], *([room] if room else [])]:
+            if (node in self.robot.navigator.furniture or node == room) and self.robot.place(node).success:
                 self.event(f"robot put {obj} down on {node} after the failed place", self.executor.minute, "WARN")
                 return
+            if self.robot.held != obj:
+                break
         log.warning("robot still holds %s" if self.robot.held == obj else "%s left the hand on the way", obj)
 
     def _finish(self, relocation: Relocation, minute: int, done: bool, reason: str) -> None:
