@@ -42,6 +42,7 @@ CARRY_TURN = 0.6  # m of path over which a base carrying an object turns from it
 SWEEP_STEP = 0.05  # m between the configurations of a carry checked for touching (`Navigator.drive_to`)
 HEADING_STEP = 0.15  # m between the points of a carry whose headings are the way ahead (`_carry_poses`)
 TURN_BACK = 0.5  # m a base carrying an object backs up at most to turn on the spot clear of everything
+POCKET = 0.5  # m^2 of floor an object set down may cut off from the rest (behind it, in a corner)
 TURN_ALONG = 2.0  # m along its way a base carrying an object may keep its heading before it turns to face ahead
 IN_THE_WAY = "someone is in the way"  # ends a navigation failure that only `Navigator.others` caused
 
@@ -223,6 +224,26 @@ class Navigator:
                     frontier.append(nxt)
         return None
 
+    def leaves_way(self, rect: tuple[float, float, float, float]) -> bool:
+        """Whether an object on the floor over world rectangle `rect` (x0, y0, x1, y1, m) leaves the floor the base
+        reaches from where it stands reachable still, but for pockets of at most POCKET m^2 (behind the object, in
+        a corner): a laundry basket set down just inside the bathroom's doorway shut the robot in."""
+        still, _, _ = self._grids(0.0)
+        grid = self.blocked | still
+        start = _nearest_free(grid, self.plan, (float(self.controller.q()[0]), float(self.controller.q()[1])))
+        if start is None:
+            return True
+        now = _flood(grid, [start])
+        grid = grid | self._grid([(rect, self.radius + CLEARANCE)])
+        left = now & ~grid
+        if not left.any():
+            return False
+        lost = left & ~_flood(grid, [tuple(c) for c in np.argwhere(left)[:1]])
+        if lost.sum() * self.plan.resolution ** 2 <= POCKET:
+            return True
+        # the base may stand on either side of it: what is left must be one piece but for pockets
+        return bool((left & ~_flood(grid, [tuple(np.argwhere(lost)[0])])).sum() * self.plan.resolution ** 2 <= POCKET)
+
     def _grids(self, reach: float) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """(still, others, near) grids (shape of `blocked`) of a base whose held object sticks out `reach` m:
         open parts grown by `reach` and floor objects by the base's clearance; `others` by the same; the cells
@@ -373,6 +394,21 @@ class Navigator:
                 touched += not clear(q)
             previous = pose
         return touched
+
+
+def _flood(grid: np.ndarray, starts: list[tuple[int, int]]) -> np.ndarray:
+    """The cells (shape of `grid`) reachable from `starts` over free (False) cells of `grid`, 4-connected."""
+    seen = np.zeros_like(grid)
+    frontier = deque(starts)
+    for cell in starts:
+        seen[cell] = True
+    while frontier:
+        i, j = frontier.popleft()
+        for a, b in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
+            if 0 <= a < grid.shape[0] and 0 <= b < grid.shape[1] and not grid[a, b] and not seen[a, b]:
+                seen[a, b] = True
+                frontier.append((a, b))
+    return seen
 
 
 def _wrap(angle: float) -> float:

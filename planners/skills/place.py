@@ -60,6 +60,7 @@ RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to
 TOP_RELEASE_OPENING = 0.05  # m per finger the fingers open at least to let go on an open top
 PASS_NEAR = 0.5  # m from its spot within which what stands on the surface is carried over (a can of wipes held
 # from the side at the carry point hung 5 cm above the stove and swept the 10 cm sauce pan 32 cm aside)
+FLOOR_DRAWS = 8  # free floor spots drawn in turn for a put-down on a floor, until one leaves the way free
 DRIVEN_TURNS = np.radians([0, 45, -45, 90, -90])  # rad off pointing at the spot a level hand is turned to, for
 # a lowering from a base pose chosen for it
 
@@ -123,15 +124,25 @@ class Place:
         return self.spots.free_spots(name, node, place_index, self.rng, {self.world.object_index(name)})
 
     def _place_on_floor(self, name: str, room: str) -> SkillResult:
-        """Put the held `name` on a free spot of the floor of `room`: near the robot when it is in that room,
-        else near the room's centre; lowered from above."""
+        """Put the held `name` on a free spot of the floor of `room` that leaves the floor passable: near the robot
+        when it is in that room, else near the room's centre; lowered from above."""
         here = self.controller.q()[:2]
         rect = next(r.rect for r in self.world.layout.rooms if r.name == room)
         near = here if self.world.layout.room_at(*here) == room else ((rect[0] + rect[2]) / 2, (rect[1] + rect[3]) / 2)
-        try:
-            spot = self.spots.floor_spot(name, room, tuple(near), self.rng, {self.world.object_index(name)})
-        except HomerError as error:
-            return SkillResult(False, f"place: {error}")
+        size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        half = math.hypot(size[0], size[1]) / 2
+        spot = None
+        for _ in range(FLOOR_DRAWS):  # the first that leaves the floor passable (`Navigator.leaves_way`)
+            try:
+                spot = self.spots.floor_spot(name, room, tuple(near), self.rng, {self.world.object_index(name)})
+            except HomerError as error:
+                return SkillResult(False, f"place: {error}")
+            x, y = spot.pos[:2]
+            if self.navigator.leaves_way((x - half, y - half, x + half, y + half)):
+                break
+        else:
+            return SkillResult(False, f"place: no spot on the floor of {room} near {np.round(near, 2).tolist()} "
+                                      f"leaves the way free ({FLOOR_DRAWS} drawn)")
         return self._down_at(name, room, room, np.array(spot.pos))
 
     def _place_on_object(self, name: str, node: str) -> SkillResult:

@@ -72,3 +72,11 @@ def test_a_base_in_someones_way_finds_the_nearest_spot_clear_of_it(robot: Robot)
     assert np.hypot(*(np.asarray(pose[:2]) - here)) < 1.5  # near, not anywhere
     assert navigator.path_to(pose)  # and the base gets there
     assert navigator.clear_of(points + (20.0, 20.0), 0.6)[:2] == tuple(here)  # out of the way already: it stays
+
+
+def test_an_object_set_down_in_a_doorway_would_shut_the_way(robot: Robot) -> None:
+    """`Navigator.leaves_way`: a laundry basket set down just inside the bathroom's doorway (where one fell) cuts
+    the floor the base reaches in two; one in the open dining room does not."""
+    navigator = robot.navigator
+    assert not navigator.leaves_way((1.96, 3.95, 2.51, 4.47))
+    assert navigator.leaves_way((3.6, 3.0, 4.0, 3.4))
