@@ -248,17 +248,19 @@ class Spots:
 def keep_out_rects(layout) -> list[tuple[float, float, float, float]]:
     """World rectangles in front of doors and drawers (their swing and a person's room to use them), where
     nothing may be left on the floor."""
+    return [rect for f in layout.furniture if (rect := keep_out_rect(f)) is not None]
 
-    rects = []
-    for f in layout.furniture:
-        parts = furniture_geometry(f).parts
-        if not parts or f.on is not None:
-            continue
-        w, d, _ = f.size
-        reach = max(w if p.joint == "hinge" else p.range[1] for p in parts) + 0.3
-        corners = local_to_world(f, np.array([[d / 2, -w / 2 - 0.05, 0], [d / 2 + reach, w / 2 + 0.05, 0]]))
-        rects.append((corners[:, 0].min(), corners[:, 1].min(), corners[:, 0].max(), corners[:, 1].max()))
-    return rects
+
+def keep_out_rect(f) -> tuple[float, float, float, float] | None:
+    """The world rectangle (x0, y0, x1, y1, m) in front of furniture `f`'s doors and drawers (their swing and a
+    person's room to use them), None for furniture without any (or standing on other furniture)."""
+    parts = furniture_geometry(f).parts
+    if not parts or f.on is not None:
+        return None
+    w, d, _ = f.size
+    reach = max(w if p.joint == "hinge" else p.range[1] for p in parts) + 0.3
+    corners = local_to_world(f, np.array([[d / 2, -w / 2 - 0.05, 0], [d / 2 + reach, w / 2 + 0.05, 0]]))
+    return corners[:, 0].min(), corners[:, 1].min(), corners[:, 0].max(), corners[:, 1].max()
 
 
 def _rotated_half(size, yaw: float) -> tuple[float, float]:
@@ -302,4 +304,4 @@ def _footprint_rect(f) -> tuple[float, float, float, float]:
     return footprint(f)
 
 
-__all__ = ["Spots", "Spot", "PlacementError", "PERSON_RADIUS", "base_height", "keep_out_rects"]
+__all__ = ["Spots", "Spot", "PlacementError", "PERSON_RADIUS", "base_height", "keep_out_rect", "keep_out_rects"]

@@ -269,3 +269,22 @@ def test_a_newspaper_put_into_a_bin_too_narrow_for_it_lies_across_the_rim_and_st
         before = world.object_positions()
         world.step(int(10.0 / world.model.opt.timestep))
         assert np.max(np.linalg.norm(world.object_positions() - before, axis=1)) < 0.005
+
+
+def test_a_door_the_person_cannot_push_open_asks_whoever_stands_in_its_swing_to_make_way(executor: Executor) -> None:
+    """`Handling._make_way_for`: the floor in front of the part's furniture (`keep_out_rect`) is what must be
+    cleared (a robot standing in the washing machine door's swing jammed it and ended the person's day)."""
+    from homer_sim.home.spots import keep_out_rect
+
+    art = executor.world.articulation("washing_machine/door")
+    rect = keep_out_rect(executor.world.layout.furniture_by_name()["washing_machine"])
+    asked = []
+    try:
+        executor.walker.make_way = lambda points: asked.append(np.asarray(points)) or True
+        assert executor.hands._make_way_for(art)
+    finally:
+        executor.walker.make_way = None
+    points = asked[0]
+    assert len(points) > 20
+    assert np.all((points >= np.array(rect[:2]) - 1e-9) & (points <= np.array(rect[2:]) + 1e-9))
+    assert not executor.hands._make_way_for(art)  # nobody to ask
