@@ -221,26 +221,9 @@ class Helper:
                 self._put_down(step.obj, by_obj[step.obj].source)
             return result
         result = self.robot.place(step.target)
-        if not result.success and self.robot.held is None:
-            result = self._pick_up_dropped(step.obj, step.target, result)
         if not result.success and self.robot.held == step.obj:  # do not keep it in the hand: put it down
             self._put_down(step.obj, by_obj[step.obj].source)
         return result
-
-    def _pick_up_dropped(self, obj: str, destination: str, failed: SkillResult) -> SkillResult:
-        """`obj` left the hand on the way to `destination` (`failed`): where it lies on the floor it is picked up
-        again and placed once more (a laundry basket dropped in the bathroom's doorway had shut the robot in and
-        the person out). The place's result if it went there, else `failed`, the object in the hand if the place
-        gave up holding it."""
-        self.world.settle(max_seconds=2.0)  # where it comes to rest (the graph keeps a moving object where it was)
-        node = self.robot.observer.update().anchor_of(obj, self.world.object_names)
-        if node not in self.world.layout.room_names():
-            return failed
-        self.event(f"robot picks {obj} up from the floor of {node}", self.executor.minute, "WARN")
-        if not self.robot.pick(obj, node, into=destination).success:
-            return failed
-        result = self.robot.place(destination)
-        return result if result.success else failed
 
     def _put_down(self, obj: str, source: str) -> None:
         """After a failed place: put the held object back where it came from, else on the nearest furniture
