@@ -16,7 +16,7 @@ import numpy as np
 
 from homer_sim.errors import HomerError
 from homer_sim.home.catalog import CATALOG
-from homer_sim.home.floorplan import _nearest_free, find_path, floor_plan, inflate, path_length
+from homer_sim.home.floorplan import find_path, floor_plan, inflate, nearest_free, path_length
 from homer_sim.home.furniture import local_to_world
 from homer_sim.home.placement import base_height
 from homer_sim.home.validate import access_sides
@@ -207,7 +207,7 @@ class Navigator:
             far &= np.hypot(xs - x, ys - y) >= distance
         if all(math.hypot(q[0] - x, q[1] - y) >= distance for x, y in points):
             return float(q[0]), float(q[1]), float(q[2])
-        start = _nearest_free(grid, self.plan, (float(q[0]), float(q[1])))
+        start = nearest_free(grid, self.plan, (float(q[0]), float(q[1])))
         if start is None:
             return None
         seen = np.zeros_like(grid)
@@ -230,7 +230,7 @@ class Navigator:
         a corner): a laundry basket set down just inside the bathroom's doorway shut the robot in."""
         still, _, _ = self._grids(0.0)
         grid = self.blocked | still
-        start = _nearest_free(grid, self.plan, (float(self.controller.q()[0]), float(self.controller.q()[1])))
+        start = nearest_free(grid, self.plan, (float(self.controller.q()[0]), float(self.controller.q()[1])))
         if start is None:
             return True
         now = _flood(grid, [start])
