@@ -93,6 +93,7 @@ class Helper:
         self.waiting: list[Relocation] = []  # relocations the person stood in the way of, for the next snapshot
         self._placed_at: dict[str, np.ndarray] = {}  # where this turn's done relocations left their objects (m)
         executor.dynamic_obstacles = self.robot_cells
+        executor.walker.make_way = self.make_way
         self.robot.navigator.others = self.person_rects
 
     def act(self, relocations: Sequence[Relocation], graph: SceneGraph, movable: np.ndarray, minute: int) -> float:
@@ -226,14 +227,18 @@ class Helper:
 
     def _put_down(self, obj: str, source: str) -> None:
         """After a failed place: put the held object back where it came from, else on the nearest furniture
-        with a top (at most FALLBACK_PLACES tries)."""
+        with a top (at most FALLBACK_PLACES tries), else on the floor of the room the robot is in: a robot left
+        holding it stops its plans and cannot make way for the person (`make_way`)."""
         x, y = self.robot.controller.q()[:2]
         tops = sorted((np.hypot(f.pos[0] - x, f.pos[1] - y), f.name) for f in self.world.layout.furniture
                       if f.name not in self.containers and self.robot.spots.places_of(f.name, ON))
-        for node in [source, *(name for _, name in tops)][:FALLBACK_PLACES]:
-            if node in self.robot.navigator.furniture and self.robot.place(node).success:
+        room = self.world.layout.room_at(x, y)
+        for node in [*[source, *(name for _, name in tops)][:FALLBACK_PLACES], *([room] if room else [])]:
+            if (node in self.robot.navigator.furniture or node == room) and self.robot.place(node).success:
                 self.event(f"robot put {obj} down on {node} after the failed place", self.executor.minute, "WARN")
                 return
+            if self.robot.held != obj:
+                break
         log.warning("robot still holds %s" if self.robot.held == obj else "%s left the hand on the way", obj)
 
     def _finish(self, relocation: Relocation, minute: int, done: bool, reason: str) -> None:
@@ -281,6 +286,26 @@ class Helper:
             if name not in asked:
                 self.log.collateral.append((minute, name, round(float(moved[i]), 3)))
                 self.event(f"robot displaced {name} by {moved[i] * 100:.0f} cm", minute, "WARN")
+
+    def make_way(self, path: list[tuple[float, float]]) -> bool:
+        """The person's walk along `path` (waypoints, m) is blocked only by the robot: it drives, arm tucked, to the
+        nearest spot it reaches ROBOT_CLEARANCE_M (and a grid cell) from the whole path; whether it did. A robot
+        left standing in a doorway (it could not park) had ended the person's day."""
+        if self.robot.held is not None:
+            return False
+        started = float(self.world.data.time)
+        pose = self.robot.navigator.clear_of(np.asarray(path), ROBOT_CLEARANCE_M + self.executor.spots.plan.resolution)
+        if pose is None:
+            return False
+        try:
+            self.robot.retract()
+            self.robot.navigator.drive_to(pose, self.robot.tucked(), **FREE_MOTION)
+        except NavigationError as error:
+            log.warning("robot could not make way for the person: %s", error)
+            return False
+        self.log.robot_minutes += (float(self.world.data.time) - started) / 60.0
+        self.event("robot made way for the person", self.executor.minute)
+        return True
 
     def person_rects(self) -> list[tuple[float, float, float, float]]:
         """The square (x0, y0, x1, y1, m) PERSON_RADIUS_M around the person, for the robot's navigation."""

@@ -138,7 +138,7 @@ def find_path(blocked: np.ndarray, plan: FloorPlan, start: tuple[float, float], 
     boolean grid of the same shape) is given, a step onto one of its cells costs 1 + `penalty_cost` times its
     length: the path keeps out of them where a detour is shorter than that."""
     grid = blocked if extra_blocked is None else blocked | extra_blocked
-    s, g = _nearest_free(grid, plan, start), _nearest_free(grid, plan, goal)
+    s, g = nearest_free(grid, plan, start), nearest_free(grid, plan, goal)
     if s is None or g is None:
         return None
     cells = _astar(grid, s, g, penalty, penalty_cost)
@@ -149,7 +149,7 @@ def find_path(blocked: np.ndarray, plan: FloorPlan, start: tuple[float, float], 
     return [start] + path[1:-1] + [goal] if len(path) > 1 else [start, goal]
 
 
-def _nearest_free(grid: np.ndarray, plan: FloorPlan, xy: tuple[float, float]) -> tuple[int, int] | None:
+def nearest_free(grid: np.ndarray, plan: FloorPlan, xy: tuple[float, float]) -> tuple[int, int] | None:
     """The free cell nearest to the cell of `xy` within 0.5 m (squared cell distance; on a tie, the first in
     (i, j) order), or None."""
     i, j = plan.cell(*xy)

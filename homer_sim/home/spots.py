@@ -22,6 +22,7 @@ from homer_sim.home.catalog import CATALOG
 from homer_sim.home.floorplan import floor_plan, inflate
 from homer_sim.home.furniture import Place, footprint, furniture_geometry, local_to_world
 from homer_sim.home.placement import SPOT_GAP, base_height, place_world, stored_yaw
+from homer_sim.home.shapes import cavity
 from homer_sim.home.validate import base_pose_for
 
 PERSON_RADIUS = 0.25  # m
@@ -29,6 +30,7 @@ _RAY_GROUPS = np.array([1, 1, 0, 0, 0, 0], dtype=np.uint8)  # furniture, objects
 PLACE_TRIES = 80
 CONTAINER_KINDS = ("cabinet", "sink", "shower")  # furniture whose everyday use is putting things inside
 DROP_LIFT = 0.004  # m above the surface an object is released
+LIES_AS_IT_LANDS = ("cloth", "sphere")  # families with no up: dropped into a container, they go in as they fall
 
 
 class PlacementError(HomerError):
@@ -119,6 +121,21 @@ class Spots:
         if not math.isfinite(highest):
             raise PlacementError(f"nothing below {np.round(xy, 2).tolist()} to put {name} on")
         return float(highest + size[2] / 2 + DROP_LIFT)
+
+    def landing_in(self, name: str, target: str, xy: tuple[float, float], from_z: float) -> float:
+        """Body z at which object `name` centred at xy rests on or in object `target` (see `landing_z`), but no
+        lower than across the rim of a container whose opening it does not fit through lying flat at any yaw
+        (things that lie as they land, cloth and balls, go in as they fall). Put in at the height of the mail at
+        the bottom of a bin, a newspaper was set right into the bin's walls, and the contacts pushed it through
+        the bin's floor or knocked the bin over (which then crept on, 6-10 cm while the robot only stood by)."""
+        z = self.landing_z(name, xy, from_z)
+        cls = CATALOG[self.layout.objects[self.world.object_index(name)].cls]
+        holder = CATALOG[self.layout.objects[self.world.object_index(target)].cls]
+        opening = cavity(holder)
+        if opening is None or cls.family in LIES_AS_IT_LANDS or math.hypot(*cls.size[:2]) / 2 <= opening.rim_radius:
+            return z
+        rim = float(self.world.object_pose(target)[0][2]) + opening.rim_z
+        return max(z, rim + cls.size[2] / 2 + DROP_LIFT)
 
     # --- placements -------------------------------------------------------------------------------------
     @cached_property
@@ -232,17 +249,19 @@ class Spots:
 def keep_out_rects(layout) -> list[tuple[float, float, float, float]]:
     """World rectangles in front of doors and drawers (their swing and a person's room to use them), where
     nothing may be left on the floor."""
+    return [rect for f in layout.furniture if (rect := keep_out_rect(f)) is not None]
 
-    rects = []
-    for f in layout.furniture:
-        parts = furniture_geometry(f).parts
-        if not parts or f.on is not None:
-            continue
-        w, d, _ = f.size
-        reach = max(w if p.joint == "hinge" else p.range[1] for p in parts) + 0.3
-        corners = local_to_world(f, np.array([[d / 2, -w / 2 - 0.05, 0], [d / 2 + reach, w / 2 + 0.05, 0]]))
-        rects.append((corners[:, 0].min(), corners[:, 1].min(), corners[:, 0].max(), corners[:, 1].max()))
-    return rects
+
+def keep_out_rect(f) -> tuple[float, float, float, float] | None:
+    """The world rectangle (x0, y0, x1, y1, m) in front of furniture `f`'s doors and drawers (their swing and a
+    person's room to use them), None for furniture without any (or standing on other furniture)."""
+    parts = furniture_geometry(f).parts
+    if not parts or f.on is not None:
+        return None
+    w, d, _ = f.size
+    reach = max(w if p.joint == "hinge" else p.range[1] for p in parts) + 0.3
+    corners = local_to_world(f, np.array([[d / 2, -w / 2 - 0.05, 0], [d / 2 + reach, w / 2 + 0.05, 0]]))
+    return corners[:, 0].min(), corners[:, 1].min(), corners[:, 0].max(), corners[:, 1].max()
 
 
 def _rotated_half(size, yaw: float) -> tuple[float, float]:
@@ -287,4 +306,4 @@ def _footprint_rect(f) -> tuple[float, float, float, float]:
     return footprint(f)
 
 
-__all__ = ["Spots", "Spot", "PlacementError", "PERSON_RADIUS", "base_height", "keep_out_rects"]
+__all__ = ["Spots", "Spot", "PlacementError", "PERSON_RADIUS", "base_height", "keep_out_rect", "keep_out_rects"]

@@ -20,7 +20,7 @@ from homer_sim.errors import PhysicsError
 from homer_sim.graph import INSIDE, ON, SceneGraph
 from homer_sim.home.catalog import CATALOG
 from homer_sim.home.placement import yaw_quat
-from homer_sim.home.spots import PlacementError, Spot, Spots
+from homer_sim.home.spots import PlacementError, Spot, Spots, keep_out_rect
 from homer_sim.person.avatar import Avatar, AvatarError, compose, relative_pose
 from homer_sim.person.state import DayState
 from homer_sim.person.walking import Walker
@@ -107,7 +107,7 @@ class Handling:
             name = self.world.object_names[int(np.argmin(np.nan_to_num(pos[:, 2], nan=-9)))]
             raise PhysicsError(f"{name} fell out of the apartment (z = {pos[:, 2].min():.2f} m)")
 
-    def drive(self, art, openness: float) -> None:
+    def drive(self, art, openness: float, retried: bool = False) -> None:
         """Move a door or drawer to `openness` by force, the hand on its handle.
 
         A force on the joint (`qfrc_applied`) makes the part follow a minimum-jerk path: the path's own inertial
@@ -115,7 +115,8 @@ class Handling:
         the force holds the target until the part is there and at rest (at most DRIVE_HOLD_STEPS), then lets go.
         Whatever the part touches is pushed, and a drawer carries its contents along by friction; a door that
         touches an object stops and raises DoorBlocked; a part the force leaves far from its target (jammed, too
-        stiff) raises AvatarError.
+        stiff) raises AvatarError, unless the walker's `make_way` (the robot) cleared the part's swing and a second
+        push (`retried`) gets it there: a robot standing in the washing machine door's swing jammed it.
         """
         model, data = self.world.model, self.world.data
         lo, hi = art.range
@@ -158,12 +159,24 @@ class Handling:
         finally:
             data.qfrc_applied[art.dof_adr] = 0.0
         if abs(data.qpos[art.qpos_adr] - target) > DRIVE_STUCK * (hi - lo):
+            if not retried and self._make_way_for(art):  # the robot stood in its swing: once more
+                self.drive(art, openness, retried=True)
+                return
             raise AvatarError(f"{art.name} is stuck at openness {self.world.openness(art.name):.2f}: the person's "
                               f"push did not move it to {openness:.2f}")
         self.step(DRIVE_REST_STEPS)
         self.settle()  # what the part carried or pushed comes to rest
         if hand is not None:
             self.avatar.set_hand(hand, self.avatar.hand_home(hand), follow=False)
+
+    def _make_way_for(self, art) -> bool:
+        """Ask the walker's `make_way` to clear the floor in front of `art`'s furniture (`keep_out_rect`, points
+        every 0.1 m); whether it moved."""
+        rect = keep_out_rect(self.world.layout.furniture_by_name()[art.furniture])
+        if self.walker.make_way is None or rect is None:
+            return False
+        xs, ys = np.meshgrid(np.arange(rect[0], rect[2] + 1e-9, 0.1), np.arange(rect[1], rect[3] + 1e-9, 0.1))
+        return self.walker.make_way([(float(x), float(y)) for x, y in zip(xs.ravel(), ys.ravel(), strict=True)])
 
     def _door_blocked(self, art) -> str | None:
         """The object a swinging door touches, if any (a door never shoves things out of its way)."""
@@ -355,7 +368,7 @@ class Handling:
         """A spot on (or in) object `target`, above whatever already lies there."""
         pos = self.world.object_pose(target)[0]
         x, y = pos[:2] + self.day.rng.uniform(-0.01, 0.01, size=2)
-        z = self.spots.landing_z(name, (x, y), pos[2] + self._cls(target).size[2] / 2 + 0.3)
+        z = self.spots.landing_in(name, target, (x, y), pos[2] + self._cls(target).size[2] / 2 + 0.3)
         return Spot((float(x), float(y), z), 0.0, target, None)
 
     def _put_on_furniture(self, name: str, target: str, relation: int | None, exclude: set[int]) -> None:

@@ -21,7 +21,9 @@ class Walker:
     Inputs, declared: the world, the avatar, the free spots and standing poses (`spots`), the day so far (`day`:
     the observed graph says where an object is, the minute stamps recorded paths), the names of the movable
     objects and of the rooms, and an optional recording. `dynamic_obstacles`, when set, returns extra blocked
-    grid cells (a robot in the way) for each walk; paths are cached only without it.
+    grid cells (a robot in the way) for each walk; paths are cached only without it. `make_way`, when set, is
+    asked to clear a path (waypoints, m) that only those cells block (the robot drives off it; True when it did),
+    and the walk is planned again.
     """
 
     def __init__(self, world: World, avatar: Avatar, spots: Spots, day: DayState, movable: set[str],
@@ -34,6 +36,7 @@ class Walker:
         self.rooms = rooms
         self.recording = recording
         self.dynamic_obstacles: Callable[[], np.ndarray | None] | None = None
+        self.make_way: Callable[[list[tuple[float, float]]], bool] | None = None
         self._paths: dict[tuple, list] = {}
 
     def anchor(self, node: str) -> str:
@@ -62,6 +65,11 @@ class Walker:
             path = self._paths.get(key) if extra is None else None
             if path is None:
                 path = find_path(self.spots.blocked, self.spots.plan, (self.avatar.x, self.avatar.y), (x, y), extra)
+                if path is None and extra is not None and self.make_way is not None:  # ask whoever is in the way
+                    clear = find_path(self.spots.blocked, self.spots.plan, (self.avatar.x, self.avatar.y), (x, y))
+                    if clear is not None and self.make_way(clear):
+                        path = find_path(self.spots.blocked, self.spots.plan, (self.avatar.x, self.avatar.y), (x, y),
+                                         self.dynamic_obstacles())
                 if path is None:
                     raise AvatarError(f"no path from {self.avatar.x:.2f}, {self.avatar.y:.2f} to {x:.2f}, {y:.2f}")
                 if extra is None:

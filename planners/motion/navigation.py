@@ -9,13 +9,14 @@ base follows them with the arm tucked, through `Controller`.
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Callable
 
 import numpy as np
 
 from homer_sim.errors import HomerError
 from homer_sim.home.catalog import CATALOG
-from homer_sim.home.floorplan import find_path, floor_plan, inflate, path_length
+from homer_sim.home.floorplan import find_path, floor_plan, inflate, nearest_free, path_length
 from homer_sim.home.furniture import local_to_world
 from homer_sim.home.placement import base_height
 from homer_sim.home.validate import access_sides
@@ -41,6 +42,8 @@ CARRY_TURN = 0.6  # m of path over which a base carrying an object turns from it
 SWEEP_STEP = 0.05  # m between the configurations of a carry checked for touching (`Navigator.drive_to`)
 HEADING_STEP = 0.15  # m between the points of a carry whose headings are the way ahead (`_carry_poses`)
 TURN_BACK = 0.5  # m a base carrying an object backs up at most to turn on the spot clear of everything
+POCKET = 0.5  # m^2 of floor an object set down may cut off from the rest (behind it, in a corner)
+TURN_ALONG = 2.0  # m along its way a base carrying an object may keep its heading before it turns to face ahead
 IN_THE_WAY = "someone is in the way"  # ends a navigation failure that only `Navigator.others` caused
 
 
@@ -189,6 +192,58 @@ class Navigator:
                                 blocked)
         return path
 
+    def clear_of(self, points: np.ndarray, distance: float) -> tuple[float, float, float] | None:
+        """The base pose (x m, y m, current yaw) nearest along the floor to the base's position, reachable from it
+        and at least `distance` m from every one of `points` (shape (k, 2), m, world): where to wait out of the
+        way of someone walking through them. The base's own position if it is already; None if no free cell
+        reachable from it is."""
+        points = np.asarray(points, dtype=float).reshape(-1, 2)
+        still, others, _ = self._grids(0.0)
+        grid = self.blocked | still | others
+        q = self.controller.q()
+        xs, ys = self.plan.cell_centers(0, grid.shape[0], 0, grid.shape[1])
+        far = np.ones_like(grid)
+        for x, y in points:
+            far &= np.hypot(xs - x, ys - y) >= distance
+        if all(math.hypot(q[0] - x, q[1] - y) >= distance for x, y in points):
+            return float(q[0]), float(q[1]), float(q[2])
+        start = nearest_free(grid, self.plan, (float(q[0]), float(q[1])))
+        if start is None:
+            return None
+        seen = np.zeros_like(grid)
+        seen[start] = True
+        frontier = deque([start])
+        while frontier:  # breadth first: the nearest such cell in steps over the grid
+            cell = frontier.popleft()
+            if far[cell]:
+                return float(xs[cell]), float(ys[cell]), float(q[2])
+            for di, dj in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+                nxt = (cell[0] + di, cell[1] + dj)
+                if 0 <= nxt[0] < grid.shape[0] and 0 <= nxt[1] < grid.shape[1] and not grid[nxt] and not seen[nxt]:
+                    seen[nxt] = True
+                    frontier.append(nxt)
+        return None
+
+    def leaves_way(self, rect: tuple[float, float, float, float]) -> bool:
+        """Whether an object on the floor over world rectangle `rect` (x0, y0, x1, y1, m) leaves the floor the base
+        reaches from where it stands reachable still, but for pockets of at most POCKET m^2 (behind the object, in
+        a corner): a laundry basket set down just inside the bathroom's doorway shut the robot in."""
+        still, _, _ = self._grids(0.0)
+        grid = self.blocked | still
+        start = nearest_free(grid, self.plan, (float(self.controller.q()[0]), float(self.controller.q()[1])))
+        if start is None:
+            return True
+        now = _flood(grid, [start])
+        grid = grid | self._grid([(rect, self.radius + CLEARANCE)])
+        left = now & ~grid
+        if not left.any():
+            return False
+        lost = left & ~_flood(grid, [tuple(c) for c in np.argwhere(left)[:1]])
+        if lost.sum() * self.plan.resolution ** 2 <= POCKET:
+            return True
+        # the base may stand on either side of it: what is left must be one piece but for pockets
+        return bool((left & ~_flood(grid, [tuple(np.argwhere(lost)[0])])).sum() * self.plan.resolution ** 2 <= POCKET)
+
     def _grids(self, reach: float) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """(still, others, near) grids (shape of `blocked`) of a base whose held object sticks out `reach` m:
         open parts grown by `reach` and floor objects by the base's clearance; `others` by the same; the cells
@@ -295,12 +350,21 @@ class Navigator:
                 points = [ahead[0], *ahead[1:-1][::WAYPOINT_STRIDE], ahead[-1]]
                 ways.insert(0, (_carry_poses(points, yaw0, goal, first, last),
                                 [tuple(q0[:2]), *ahead, tuple(goal[:2])]))
+                if clear is not None and first is None:  # or turned on the way, where that touches nothing
+                    ways[1:1] = [(poses, ways[0][1]) for poses in _turned_on_the_way(points, yaw0, goal, last)]
         if clear is not None and reach > self.radius + CLEARANCE:  # also: the heading kept, turned at the end
             along = np.cumsum(np.hypot(*np.diff(np.asarray([tuple(q0[:2]), *keep]), axis=0).T))
             ends = np.clip((along - along[-1] + CARRY_TURN) / CARRY_TURN, 0.0, 1.0)
             ways.append(([(x, y, yaw0 + dyaw * float(f)) for (x, y), f in zip(keep, ends, strict=True)], path))
         if clear is not None and len(ways) > 1:
-            ways.sort(key=lambda way: self._touches(q0, tuck, way[0], reach, clear))
+            best = None
+            for way in ways:  # the first that touches nothing, else the one that touches least often
+                touches = self._touches(q0, tuck, way[0], reach, clear)
+                if best is None or touches < best[0]:
+                    best = (touches, way)
+                if touches == 0:
+                    break
+            ways = [best[1]]
         poses, path = ways[0]
         waypoints = []
         for pose in poses:
@@ -330,6 +394,21 @@ class Navigator:
                 touched += not clear(q)
             previous = pose
         return touched
+
+
+def _flood(grid: np.ndarray, starts: list[tuple[int, int]]) -> np.ndarray:
+    """The cells (shape of `grid`) reachable from `starts` over free (False) cells of `grid`, 4-connected."""
+    seen = np.zeros_like(grid)
+    frontier = deque(starts)
+    for cell in starts:
+        seen[cell] = True
+    while frontier:
+        i, j = frontier.popleft()
+        for a, b in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1)):
+            if 0 <= a < grid.shape[0] and 0 <= b < grid.shape[1] and not grid[a, b] and not seen[a, b]:
+                seen[a, b] = True
+                frontier.append((a, b))
+    return seen
 
 
 def _wrap(angle: float) -> float:
@@ -375,6 +454,23 @@ def _carry_poses(points: list[tuple[float, float]], yaw0: float, goal: tuple[flo
         previous = previous + _wrap(yaw - previous)
         unwrapped.append((float(x), float(y), previous))
     return unwrapped
+
+
+def _turned_on_the_way(points: list[tuple[float, float]], yaw0: float, goal: tuple[float, float, float],
+                       last: tuple | None) -> list[list[tuple[float, float, float]]]:
+    """Base poses (x m, y m, yaw rad) along `points` (as for `_carry_poses`) for a base at heading `yaw0` that keeps
+    its heading to one of the points within TURN_ALONG m along the way, turns on the spot there to face the way
+    ahead, and goes on as `_carry_poses` from there: one list per such point, nearest first. A base with an object
+    held out in front that turned where it started swept it into the bed it had picked it beside, and one that kept
+    its heading carried a laundry basket sideways into a door frame."""
+    ways, along = [], 0.0
+    for k in range(1, len(points) - 1):
+        along += math.dist(points[k - 1], points[k])
+        if along > TURN_ALONG:
+            break
+        kept = [(float(x), float(y), yaw0) for x, y in points[1:k + 1]]
+        ways.append(kept + _carry_poses(points[k:], yaw0, goal, (points[k], True), last)[1:])
+    return ways
 
 
 def base_candidates(grip_pos: np.ndarray, grip_rot: np.ndarray, previous_xy: np.ndarray | None,

@@ -60,6 +60,7 @@ RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to
 TOP_RELEASE_OPENING = 0.05  # m per finger the fingers open at least to let go on an open top
 PASS_NEAR = 0.5  # m from its spot within which what stands on the surface is carried over (a can of wipes held
 # from the side at the carry point hung 5 cm above the stove and swept the 10 cm sauce pan 32 cm aside)
+FLOOR_DRAWS = 8  # free floor spots drawn in turn for a put-down on a floor, until one leaves the way free
 DRIVEN_TURNS = np.radians([0, 45, -45, 90, -90])  # rad off pointing at the spot a level hand is turned to, for
 # a lowering from a base pose chosen for it
 
@@ -123,15 +124,25 @@ class Place:
         return self.spots.free_spots(name, node, place_index, self.rng, {self.world.object_index(name)})
 
     def _place_on_floor(self, name: str, room: str) -> SkillResult:
-        """Put the held `name` on a free spot of the floor of `room`: near the robot when it is in that room,
-        else near the room's centre; lowered from above."""
+        """Put the held `name` on a free spot of the floor of `room` that leaves the floor passable: near the robot
+        when it is in that room, else near the room's centre; lowered from above."""
         here = self.controller.q()[:2]
         rect = next(r.rect for r in self.world.layout.rooms if r.name == room)
         near = here if self.world.layout.room_at(*here) == room else ((rect[0] + rect[2]) / 2, (rect[1] + rect[3]) / 2)
-        try:
-            spot = self.spots.floor_spot(name, room, tuple(near), self.rng, {self.world.object_index(name)})
-        except HomerError as error:
-            return SkillResult(False, f"place: {error}")
+        size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        half = math.hypot(size[0], size[1]) / 2
+        spot = None
+        for _ in range(FLOOR_DRAWS):  # the first that leaves the floor passable (`Navigator.leaves_way`)
+            try:
+                spot = self.spots.floor_spot(name, room, tuple(near), self.rng, {self.world.object_index(name)})
+            except HomerError as error:
+                return SkillResult(False, f"place: {error}")
+            x, y = spot.pos[:2]
+            if self.navigator.leaves_way((x - half, y - half, x + half, y + half)):
+                break
+        else:
+            return SkillResult(False, f"place: no spot on the floor of {room} near {np.round(near, 2).tolist()} "
+                                      f"leaves the way free ({FLOOR_DRAWS} drawn)")
         return self._down_at(name, room, room, np.array(spot.pos))
 
     def _place_on_object(self, name: str, node: str) -> SkillResult:
@@ -144,7 +155,7 @@ class Place:
         size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
         rim = position[2] + cls.size[2] / 2
         try:
-            z = self.spots.landing_z(name, tuple(position[:2]), rim + size[2] + 0.05)
+            z = self.spots.landing_in(name, node, tuple(position[:2]), rim + size[2] + 0.05)
         except HomerError as error:
             return SkillResult(False, f"place: {error}")
         family = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].family
@@ -233,22 +244,50 @@ class Place:
         down = self.arm.line(above, release, quat)
         if down is None:
             return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
-        struck = self._struck(name, down)
+        struck = self._struck(name, down, onto=node if node in self.world.object_names else None)
         if struck:
             return SkillResult(False, f"place: lowering {name} onto {node} would strike {', '.join(struck)}")
         self.controller.move_through(down)
         self.controller.settle(0.003)
         return self._release_on(name, node, target, release, quat)
 
-    def _struck(self, name: str, path: list[np.ndarray]) -> list[str]:
-        """The objects other than the held `name` that the arm or `name` (as it hangs in the hand now) would touch
-        along `path` (configurations, each shape (13,)): a lowering no clear way was found for is not tried onto
-        them (a wrist came down on a sauce pan beside the spot and pushed it)."""
+    def _struck(self, name: str, path: list[np.ndarray], onto: str | None = None) -> list[str]:
+        """The objects that the arm or the held `name` (as it hangs in the hand now) would touch along `path`
+        (configurations, each shape (13,)), but `name`, what rides in or on it (`_riders`), the object `onto` it is
+        lowered onto and the objects that one lies on: a lowering no clear way was found for is not tried onto
+        them (a wrist came down on a sauce pan beside the spot and pushed it). The riders stay where they are in
+        the check while the held object moves, so they would count as struck (a bin with a newspaper in it); a
+        lowering onto an object ends touching it, and a bin wider than the mail it goes onto touches the
+        newspaper under the mail too."""
         held = self.arm.held_object(name)
         bodies = {int(b): n for n, b in zip(self.world.object_names, self.world.object_body_ids, strict=True)}
-        own = int(self.world.object_body_ids[self.world.object_index(name)])
-        struck = set().union(*(self.clearance.bodies_struck(q, held, frozenset(bodies) - {own}) for q in path))
+        graph = self.observer.update()
+        skip = {name, *self._riders(name, graph)}
+        while onto in self.world.object_names:  # the object it goes onto and the pile that one lies on
+            skip.add(onto)
+            onto = graph.parent_of(onto)
+        checked = frozenset(b for b, n in bodies.items() if n not in skip)
+        struck = set().union(*(self.clearance.bodies_struck(q, held, checked) for q in path))
         return sorted(bodies[b] for b in struck)
+
+    def _riders(self, name: str, graph) -> set[str]:
+        """The objects that rest (through others) on or in `name` in the observed scene graph, or whose centre lies
+        inside its box (a newspaper in a bin the graph puts the bin on); `graph`: the observed scene graph."""
+        index = self.world.object_index(name)
+        centre = self.world.object_pose(name)[0]
+        rotation = self.world.data.xmat[self.world.object_body_ids[index]].reshape(3, 3)
+        half = np.asarray(CATALOG[self.world.layout.objects[index].cls].size) / 2
+        riders = set()
+        for other in self.world.object_names:
+            if other == name:
+                continue
+            parent = graph.parent_of(other)
+            while parent and parent != name:
+                parent = graph.parent_of(parent)
+            local = rotation.T @ (self.world.object_pose(other)[0] - centre)
+            if parent == name or bool(np.all(np.abs(local) <= half)):
+                riders.add(other)
+        return riders
 
     def _way_over(self, name: str, above: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
         """Configurations of a straight grip line taking the held `name` to `above` (m, at `quat`): the base free to

@@ -58,3 +58,25 @@ def test_a_way_only_someone_blocks_fails_saying_so(robot: Robot) -> None:
     with pytest.raises(NavigationError) as error:  # a way blocked by the apartment says nothing of anyone
         navigator.path_to((-40.0, -40.0, 0.0))
     assert IN_THE_WAY not in str(error.value)
+
+
+def test_a_base_in_someones_way_finds_the_nearest_spot_clear_of_it(robot: Robot) -> None:
+    """`Navigator.clear_of`: where the robot waits while the person walks a path through where it stands (a robot
+    left in a doorway had ended the person's day): reachable from it, at least the distance from every point."""
+    navigator = robot.navigator
+    here = robot.controller.q()[:2]
+    points = np.array([here + (dx, 0.0) for dx in np.arange(-1.0, 1.01, 0.05)])  # a walk straight through it
+    pose = navigator.clear_of(points, 0.6)
+    assert pose is not None
+    assert np.min(np.hypot(*(points - np.asarray(pose[:2])).T)) >= 0.6 - 1e-9
+    assert np.hypot(*(np.asarray(pose[:2]) - here)) < 1.5  # near, not anywhere
+    assert navigator.path_to(pose)  # and the base gets there
+    assert navigator.clear_of(points + (20.0, 20.0), 0.6)[:2] == tuple(here)  # out of the way already: it stays
+
+
+def test_an_object_set_down_in_a_doorway_would_shut_the_way(robot: Robot) -> None:
+    """`Navigator.leaves_way`: a laundry basket set down just inside the bathroom's doorway (where one fell) cuts
+    the floor the base reaches in two; one in the open dining room does not."""
+    navigator = robot.navigator
+    assert not navigator.leaves_way((1.96, 3.95, 2.51, 4.47))
+    assert navigator.leaves_way((3.6, 3.0, 4.0, 3.4))

@@ -266,3 +266,21 @@ def test_a_dress_is_dropped_into_the_laundry_basket_from_over_its_rim() -> None:
     drift, name = _others_moved(world, before, "clothes_dress")
     assert drift < 0.02, f"{name} moved {drift * 100:.1f} cm"
     assert world.warnings() == 0 and not world.has_nan()
+
+
+def test_a_lowering_may_touch_what_it_goes_onto_and_what_rides_in_the_held_object() -> None:
+    """`Place._struck` leaves out the object a held one is lowered onto and what rides in the held one (they stay
+    put in the check while it moves): lowering a bin with the mail in it onto a newspaper was refused as striking
+    both. Anything else the held object touches still counts."""
+    world = World(extras=[add_robot])
+    world.set_object_pose("newspaper", (5.3, 2.7, 0.006), (1.0, 0.0, 0.0, 0.0))
+    world.set_object_pose("trashcan", (5.3, 2.7, 0.162), (1.0, 0.0, 0.0, 0.0))
+    world.set_object_pose("mail", (5.3, 2.7, 0.028), (1.0, 0.0, 0.0, 0.0))
+    world.settle()
+    robot = Robot(world)
+    assert robot.observer.update().parent_of("mail") == "trashcan"
+    path = [robot.controller.target.copy()]  # the bin as it stands, "held" where it is
+    place = robot._place
+    assert "mail" in place._riders("trashcan", robot.observer.update())
+    assert place._struck("trashcan", path) == ["newspaper"]  # it stands on it
+    assert place._struck("trashcan", path, onto="newspaper") == []

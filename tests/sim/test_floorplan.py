@@ -98,7 +98,7 @@ def test_find_path_matches_the_reference_on_the_apartment(apartment) -> None:
               for _ in range(2)]
         xy = [(x + rng.normal(0, 0.2), y + rng.normal(0, 0.2)) for x, y in xy]  # off free cells, to snap
         cells = [_reference_nearest_free(blocked, plan, p) for p in xy]
-        assert [floorplan._nearest_free(blocked, plan, p) for p in xy] == cells
+        assert [floorplan.nearest_free(blocked, plan, p) for p in xy] == cells
         path = find_path(blocked, plan, xy[0], xy[1])
         expected = _reference_astar(blocked, *cells)
         if expected is None:
@@ -114,7 +114,7 @@ def test_nearest_free_at_the_grid_edge_and_outside() -> None:
     grid[0, 8] = grid[11, 0] = grid[5, 4] = False
     plan = FloorPlan(grid, (0.0, 0.0), 0.05)
     for xy in [(0.0, 0.4), (0.55, 0.0), (0.3, 0.2), (-0.3, 0.1), (0.1, -0.2), (5.0, 5.0), (-5.0, 0.2)]:
-        assert floorplan._nearest_free(grid, plan, xy) == _reference_nearest_free(grid, plan, xy)
+        assert floorplan.nearest_free(grid, plan, xy) == _reference_nearest_free(grid, plan, xy)
 
 
 def test_a_grid_changed_in_place_is_searched_afresh() -> None:
