@@ -153,8 +153,7 @@ OBJECTS = (
     # reach in (their cupboard holds also the cup, the oats, the coffee and its filters, the peanut butter, the
     # juice and the frying pan, their kitchen cabinet the washcloth, their crowded bathroom counter the toothbrush
     # holder); declared last so that the objects above keep their start poses.
-    *_objects("cupboard", INSIDE, "dry_pasta", level=2),  # the bottom shelf's 6 boxes and tins leave 4 cm between
-    # them; a 7th there left 2.4 cm, no room for a finger beside the rice
+    *_objects("cupboard", INSIDE, "dry_pasta", level=0),
     *_objects("dishwasher", INSIDE, "cup", level=1),
     *_objects("bookshelf_dining_room", ON, "coffee_filter juice", level=2),
     *_objects("bookshelf_dining_room", ON, "food_oatmeal ground_coffee food_peanut_butter", level=0),

@@ -7,7 +7,7 @@ sample free spots with an explicit random generator. No mujoco here.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cache
 
 import numpy as np
@@ -117,35 +117,16 @@ def pack_spot(place: Place, cls: ObjectClass, taken: list[tuple], step: float = 
     return None
 
 
-@cache
-def inside_side_gap(layout: Layout, f: Furniture, level: int, place: Place) -> float:
-    """The gap (m) the start layout leaves beside each object inside `f` on its place `level`, where a hand comes
-    in from the front: the widest of ROW_GAP (a finger's room: a side grasp's pads open 1 cm past the object, its
-    fingers are 3.2 cm thick, also after the grasp suite shifts the object 2.5 cm) down to SPOT_GAP in 5 mm steps
-    with which as many of the objects declared on that place stand in its front row as with SPOT_GAP, packed on
-    the place narrowed by what the gap adds to SPOT_GAP at either wall (`walled`) (the cheese packed 2.5 cm beside
-    the milk left a side grasp's finger no room; a thing pushed to a back row is reached only over the others,
-    one pushed against a wall as badly as beside a neighbour)."""
-    objects = [CATALOG[o.cls] for o in layout.objects if o.parent == f.name and o.level == level]
-    front = place.center[0] + place.half_xy[0]
-
-    def in_front(gap: float) -> int:
-        taken: list[tuple] = []
-        for cls in objects:
-            long = lengthwise(f, place, cls)
-            narrowed = walled(place, gap)
-            if pack_spot(narrowed, cls, taken, lengthwise=long, centre_first=f.kind == "cabinet",
-                         side_gap=gap) is None:
-                pack_spot(narrowed, cls, taken, lengthwise=long, side_gap=gap)
-        return sum(rect[2] > front - 1e-6 for rect in taken)
-
-    least = in_front(SPOT_GAP)
-    return next((gap for gap in np.arange(ROW_GAP, SPOT_GAP, -0.005) if in_front(gap) >= least), SPOT_GAP)
-
-
-def walled(place: Place, gap: float) -> Place:
-    """`place` narrowed along its width by what `gap` (m) adds to SPOT_GAP at either end."""
-    return replace(place, half_xy=(place.half_xy[0], place.half_xy[1] - max(gap - SPOT_GAP, 0.0)))
+def cabinet_side_gap(layout: Layout, f: Furniture, level: int, place: Place) -> float:
+    """The gap (m) the start layout leaves beside each object inside cabinet `f` on its place `level`: ROW_GAP,
+    a finger's room (a side grasp's pads open 1 cm past the object, its fingers 3.2 cm thick) also after the
+    grasp suite shifts the object 2.5 cm, where the objects declared on that place fit side by side with that
+    much room between them and the walls; else as much as they leave spread evenly, at least SPOT_GAP (the
+    cheese packed 2.5 cm beside the milk left the fingers no room)."""
+    widths = [CATALOG[o.cls].size[1] if lengthwise(f, place, CATALOG[o.cls]) else CATALOG[o.cls].size[0]
+              for o in layout.objects if o.parent == f.name and o.level == level]
+    spare = 2 * place.half_xy[1] - sum(widths)
+    return min(ROW_GAP, max(SPOT_GAP, spare / (len(widths) + 1)))
 
 
 def _candidate_places(f: Furniture, decl: ObjectDecl) -> list[tuple[int, Place]]:
@@ -215,17 +196,15 @@ def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
             # past the open door and the side walls
             # on an open top the robot's hand comes down from above: rows keep a finger's room between them where
             # the top has room for that
-            # inside furniture the hand comes in from the front: neighbours keep a finger's room beside them where
-            # the place has room for that (`inside_side_gap`)
-            side_gap = inside_side_gap(layout, f, k, place) if place.relation == INSIDE and decl.level is not None \
+            # inside a cabinet the hand comes in from the front: neighbours keep a finger's room beside them where
+            # the shelf has room for that (`cabinet_side_gap`)
+            side_gap = cabinet_side_gap(layout, f, k, place) if f.kind == "cabinet" and place.relation == INSIDE \
                 else SPOT_GAP
-            rows = (ROW_GAP, SPOT_GAP) if place.relation == ON else (SPOT_GAP,)
-            for row_gap, gap in [(r, side_gap) for r in rows] + ([(SPOT_GAP, SPOT_GAP)] if side_gap > SPOT_GAP else []):
-                narrowed = walled(place, gap)
-                spot = pack_spot(narrowed, cls, spots, lengthwise=long, centre_first=f.kind == "cabinet",
-                                 row_gap=row_gap, side_gap=gap)
+            for row_gap in (ROW_GAP, SPOT_GAP) if place.relation == ON else (SPOT_GAP,):
+                spot = pack_spot(place, cls, spots, lengthwise=long, centre_first=f.kind == "cabinet",
+                                 row_gap=row_gap, side_gap=side_gap)
                 if spot is None and f.kind == "cabinet":  # what does not fit beside them packs from the side
-                    spot = pack_spot(narrowed, cls, spots, lengthwise=long, row_gap=row_gap, side_gap=gap)
+                    spot = pack_spot(place, cls, spots, lengthwise=long, row_gap=row_gap, side_gap=side_gap)
                 if spot is not None:
                     break
             if spot is not None:
