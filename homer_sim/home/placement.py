@@ -89,10 +89,10 @@ def stored_yaw(f: Furniture, place: Place, cls: ObjectClass) -> float:
 
 
 def pack_spot(place: Place, cls: ObjectClass, taken: list[tuple], step: float = 0.01,
-              lengthwise: bool = False, centre_first: bool = False, row_gap: float = SPOT_GAP
-              ) -> tuple[float, float] | None:
+              lengthwise: bool = False, centre_first: bool = False, row_gap: float = SPOT_GAP,
+              side_gap: float = SPOT_GAP) -> tuple[float, float] | None:
     """First free (x, y) in the place frame for an object whose width (its x) runs along the place's y, or
-    along its x (the depth) if `lengthwise`, SPOT_GAP from its neighbours beside it and `row_gap` from those in
+    along its x (the depth) if `lengthwise`, `side_gap` from its neighbours beside it and `row_gap` from those in
     front of or behind it.
 
     Scans from the front edge backwards, left to right (-y first) or, if `centre_first`, from the middle out;
@@ -111,10 +111,22 @@ def pack_spot(place: Place, cls: ObjectClass, taken: list[tuple], step: float = 
         ys = np.arange(cy - hy + half_y, cy + hy - half_y + 1e-9, step)
         for y in ys[np.argsort(np.abs(ys - cy), kind="stable")] if centre_first else ys:
             rect = (x - half_x, y - half_y, x + half_x, y + half_y)
-            if not any(_overlaps(rect, t, row_gap, SPOT_GAP) for t in taken):
+            if not any(_overlaps(rect, t, row_gap, side_gap) for t in taken):
                 taken.append(rect)
                 return float(x), float(y)
     return None
+
+
+def cabinet_side_gap(layout: Layout, f: Furniture, level: int, place: Place) -> float:
+    """The gap (m) the start layout leaves beside each object inside cabinet `f` on its place `level`: ROW_GAP,
+    a finger's room (a side grasp's pads open 1 cm past the object, its fingers 3.2 cm thick) also after the
+    grasp suite shifts the object 2.5 cm, where the objects declared on that place fit side by side with that
+    much room between them and the walls; else as much as they leave spread evenly, at least SPOT_GAP (the
+    cheese packed 2.5 cm beside the milk left the fingers no room)."""
+    widths = [CATALOG[o.cls].size[1] if lengthwise(f, place, CATALOG[o.cls]) else CATALOG[o.cls].size[0]
+              for o in layout.objects if o.parent == f.name and o.level == level]
+    spare = 2 * place.half_xy[1] - sum(widths)
+    return min(ROW_GAP, max(SPOT_GAP, spare / (len(widths) + 1)))
 
 
 def _candidate_places(f: Furniture, decl: ObjectDecl) -> list[tuple[int, Place]]:
@@ -184,11 +196,15 @@ def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
             # past the open door and the side walls
             # on an open top the robot's hand comes down from above: rows keep a finger's room between them where
             # the top has room for that
+            # inside a cabinet the hand comes in from the front: neighbours keep a finger's room beside them where
+            # the shelf has room for that (`cabinet_side_gap`)
+            side_gap = cabinet_side_gap(layout, f, k, place) if f.kind == "cabinet" and place.relation == INSIDE \
+                else SPOT_GAP
             for row_gap in (ROW_GAP, SPOT_GAP) if place.relation == ON else (SPOT_GAP,):
                 spot = pack_spot(place, cls, spots, lengthwise=long, centre_first=f.kind == "cabinet",
-                                 row_gap=row_gap)
+                                 row_gap=row_gap, side_gap=side_gap)
                 if spot is None and f.kind == "cabinet":  # what does not fit beside them packs from the side
-                    spot = pack_spot(place, cls, spots, lengthwise=long, row_gap=row_gap)
+                    spot = pack_spot(place, cls, spots, lengthwise=long, row_gap=row_gap, side_gap=side_gap)
                 if spot is not None:
                     break
             if spot is not None:

@@ -370,16 +370,21 @@ class Pick:
         else:
             legs = [LIFT * up]
         legs[-1] = legs[-1] + max(0.0, grasp.lift - sum(leg[2] for leg in legs)) * up  # raised further
-        point = grasp.position
+        # every leg planned before the hand moves: a leg out of reach found once the object is up and drawn out
+        # let go of it there (a conditioner raised off the shower's shelf fell 84 cm to the floor)
+        point, seed, paths = grasp.position, self.controller.target, []
         for leg in legs:  # the base follows a horizontal leg; a vertical one only where the arm alone falls short
-            path = self.arm.line(point, point + leg, quat, base_cost=PULL_BASE_COST if leg[2] == 0 else GRASP_BASE_COST)
+            path = self.arm.line(point, point + leg, quat, seed=seed,
+                                 base_cost=PULL_BASE_COST if leg[2] == 0 else GRASP_BASE_COST)
             if path is None and leg[2] != 0:
-                path = self.arm.line(point, point + leg, quat, base_cost=PULL_BASE_COST)
+                path = self.arm.line(point, point + leg, quat, seed=seed, base_cost=PULL_BASE_COST)
             if path is None:
                 self._back_off(above, quat)
                 return SkillResult(False, "the lift leaves the arm's reach")
+            paths.append(path)
+            point, seed = point + leg, path[-1]
+        for path in paths:
             self.controller.move_through(path)
-            point = point + leg
         if grasp.hang:  # turn the hand until the object hangs straight below the grip site
             com = self.world.data.xipos[self.world.object_body_ids[self.world.object_index(name)]]
             grip = self.world.data.site("robot/grip")

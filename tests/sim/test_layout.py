@@ -99,3 +99,40 @@ def test_rows_on_an_open_top_leave_a_finger_between_them() -> None:
     pack_spot(shallow, knife, taken, row_gap=ROW_GAP)
     assert pack_spot(shallow, rack, list(taken), row_gap=ROW_GAP) is None
     assert pack_spot(shallow, rack, taken, row_gap=SPOT_GAP) is not None
+
+
+def test_neighbours_in_a_cabinet_leave_a_finger_between_them() -> None:
+    """Inside a cabinet the start layout keeps `cabinet_side_gap` beside each object: ROW_GAP where the shelf's
+    objects fit side by side so (the cheese packed 2.5 cm beside the milk left a side grasp's finger no room), as
+    much as they leave spread evenly where they do not, never under SPOT_GAP."""
+    import itertools
+    import math
+
+    from homer_sim.home.catalog import CATALOG
+    from homer_sim.home.furniture import furniture_geometry
+    from homer_sim.home.placement import ROW_GAP, SPOT_GAP, cabinet_side_gap, lengthwise, start_poses
+
+    layout = default_layout()
+    poses = start_poses(layout)
+    furniture = layout.furniture_by_name()
+    checked = 0
+    for f in (f for f in layout.furniture if f.kind == "cabinet"):
+        for level, place in enumerate(furniture_geometry(f).places):
+            objects = [o for o in layout.objects if o.parent == f.name and o.level == level]
+            if place.relation != INSIDE or len(objects) < 2:
+                continue
+            gap = cabinet_side_gap(layout, f, level, place)
+            assert SPOT_GAP <= gap <= ROW_GAP
+            c, s = math.cos(furniture[f.name].yaw), math.sin(furniture[f.name].yaw)
+            boxes = []  # (from, to) across the cabinet's width, (from, to) along its depth
+            for o in objects:
+                cls = CATALOG[o.cls]
+                wide, deep = (cls.size[1], cls.size[0]) if lengthwise(f, place, cls) else cls.size[:2]
+                dx, dy = poses[o.name].pos[0] - f.pos[0], poses[o.name].pos[1] - f.pos[1]
+                across, depth = -s * dx + c * dy, c * dx + s * dy
+                boxes.append((across - wide / 2, across + wide / 2, depth - deep / 2, depth + deep / 2))
+            for a, b in itertools.combinations(boxes, 2):
+                if a[2] < b[3] and b[2] < a[3]:  # side by side in one row
+                    assert max(b[0] - a[1], a[0] - b[1]) >= gap - 1e-6, (f.name, level)
+            checked += gap >= ROW_GAP - 1e-9
+    assert checked >= 3  # the fridge's, the bathroom cabinet's shelves have room for a finger
