@@ -295,7 +295,7 @@ class Helper:
             return False
         started = float(self.world.data.time)
         pose = self.robot.navigator.clear_of(np.asarray(path), ROBOT_CLEARANCE_M + self.executor.spots.plan.resolution)
-        if pose is None:
+        if pose is None or np.allclose(pose[:2], self.robot.controller.q()[:2]):  # nowhere, or already clear of it
             return False
         try:
             self.robot.retract()

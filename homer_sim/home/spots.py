@@ -124,10 +124,11 @@ class Spots:
 
     def landing_in(self, name: str, target: str, xy: tuple[float, float], from_z: float) -> float:
         """Body z at which object `name` centred at xy rests on or in object `target` (see `landing_z`), but no
-        lower than across the rim of a container whose opening it does not fit through lying flat at any yaw
-        (things that lie as they land, cloth and balls, go in as they fall). Put in at the height of the mail at
-        the bottom of a bin, a newspaper was set right into the bin's walls, and the contacts pushed it through
-        the bin's floor or knocked the bin over (which then crept on, 6-10 cm while the robot only stood by)."""
+        lower than across the rim of a container unless it fits through the opening lying flat at every yaw (its
+        half-diagonal within the rim's radius; things that lie as they land, cloth and balls, go in as they fall).
+        Put in at the height of the mail at the bottom of a bin, a newspaper was set right into the bin's walls, and
+        the contacts pushed it through the bin's floor or knocked the bin over (which then crept on, 6-10 cm while
+        the robot only stood by)."""
         z = self.landing_z(name, xy, from_z)
         cls = CATALOG[self.layout.objects[self.world.object_index(name)].cls]
         holder = CATALOG[self.layout.objects[self.world.object_index(target)].cls]

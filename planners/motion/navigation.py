@@ -238,10 +238,13 @@ class Navigator:
         left = now & ~grid
         if not left.any():
             return False
+        if not grid[start]:  # the base stays on its own side: all but pockets must be reachable from there
+            return bool((left & ~_flood(grid, [start])).sum() * self.plan.resolution ** 2 <= POCKET)
         lost = left & ~_flood(grid, [tuple(c) for c in np.argwhere(left)[:1]])
         if lost.sum() * self.plan.resolution ** 2 <= POCKET:
             return True
-        # the base may stand on either side of it: what is left must be one piece but for pockets
+        # the object covers where the base stands, so it may end on either side: what is left must be one piece but
+        # for pockets
         return bool((left & ~_flood(grid, [tuple(np.argwhere(lost)[0])])).sum() * self.plan.resolution ** 2 <= POCKET)
 
     def _grids(self, reach: float) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
