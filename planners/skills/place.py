@@ -152,14 +152,14 @@ class Place:
         too: whether the put-down object stays on it is for physics to say."""
         cls = CATALOG[self.world.layout.objects[self.world.object_index(node)].cls]
         position = self.world.object_pose(node)[0]
-        size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        held = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls]
+        size = held.size
         rim = position[2] + cls.size[2] / 2
         try:
             z = self.spots.landing_in(name, node, tuple(position[:2]), rim + size[2] + 0.05)
         except HomerError as error:
             return SkillResult(False, f"place: {error}")
-        family = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].family
-        if cls.is_container and family in NO_UP_FAMILIES:  # dropped in from over the rim (see DROP_INTO)
+        if cls.is_container and held.family in NO_UP_FAMILIES:  # dropped in from over the rim (see DROP_INTO)
             z = max(z, rim + size[2] / 2 + DROP_INTO)
         graph = self.observer.update()
         anchor = node
@@ -336,11 +336,7 @@ class Place:
         """Whether object `name` touches something besides the robot now, and all of it is `node` or what lies on
         or in `node` (a dress held by its fold hung down into the laundry basket and met its walls 10 cm above the
         basket's floor: it is where it goes, let go there it stays in)."""
-        model, data, robot = self.world.model, self.world.data, self.clearance.robot
-        body = self.world.object_body_ids[self.world.object_index(name)]
-        g1, g2 = data.contact.geom1[:data.ncon], data.contact.geom2[:data.ncon]
-        others = np.concatenate([g2[(model.geom_bodyid[g1] == body) & ~robot[g2]],
-                                 g1[(model.geom_bodyid[g2] == body) & ~robot[g1]]])
+        others = self._touching(name)
         if not len(others):
             return False
         graph = self.observer.update()
@@ -349,11 +345,15 @@ class Place:
 
     def _touches_apartment(self, name: str) -> bool:
         """Whether object `name` touches anything but the robot now."""
+        return bool(len(self._touching(name)))
+
+    def _touching(self, name: str) -> np.ndarray:
+        """The geoms, not the robot's, that object `name` touches now (one per contact)."""
         model, data, robot = self.world.model, self.world.data, self.clearance.robot
         body = self.world.object_body_ids[self.world.object_index(name)]
         g1, g2 = data.contact.geom1[:data.ncon], data.contact.geom2[:data.ncon]
-        mine1, mine2 = model.geom_bodyid[g1] == body, model.geom_bodyid[g2] == body
-        return bool(np.any((mine1 & ~robot[g2]) | (mine2 & ~robot[g1])))
+        return np.concatenate([g2[(model.geom_bodyid[g1] == body) & ~robot[g2]],
+                               g1[(model.geom_bodyid[g2] == body) & ~robot[g1]]])
 
     def _lower_checked(self, name: str, node: str, target: np.ndarray) -> SkillResult | None:
         """Lower the held `name` onto `target` (m, a spot on furniture `node`) from where the robot stands, the
