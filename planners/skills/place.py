@@ -446,10 +446,12 @@ class Place:
         """Configurations that take the open hand away from an object it let go of at `release` (m): back along
         the grip x axis APPROACH m (straight up for a hand pointing down), then, for a hand held level, up as
         much (it held the object's side: lifted at once, or swung back into the tuck, the fingers knock it
-        over)."""
+        over). The base stays where it can, else it backs away with the hand (a cup let go 75 cm out over the
+        dining table at 0.8 m was out of the arm's reach drawn back with the base held; the retract then lifted
+        the open fingers round it and swung them across it, and it fell over)."""
         x = self.world.data.site("robot/grip").xmat.reshape(3, 3)[:, 0].copy()
         back = release - APPROACH * x
-        away = self.arm.line(release, back, quat)
+        away = self.arm.line(release, back, quat) or self.arm.line(release, back, quat, base_cost=PULL_BASE_COST)
         if away is None or np.linalg.norm(x[:2]) <= LEVEL_HAND:
             return away
         return away + (self.arm.line(back, back + np.array([0.0, 0.0, APPROACH]), quat, seed=away[-1]) or [])
