@@ -98,7 +98,22 @@ class Robot:
 
     def place(self, node: str, relation: int | None = None) -> SkillResult:
         """Put the held object at a free spot ON or INSIDE furniture `node`, release it and retreat (see
-        `planners.skills.place.Place.place`)."""
+        `planners.skills.place.Place.place`). Where a shelf inside `node` took nothing from a hand pointing down
+        (the wrist meets the shelf above: a pill bottle picked from above off a crowded counter, a spoon off the
+        table), the object is set down on the nearest open top without a door, picked again as a shelf takes it
+        (`pick` with `into`: from the side or pitched, where a grasp fits there) and placed once more."""
+        result = self._place.place(node, relation)
+        name = self.held
+        if (result.success or name is None or np.linalg.norm(self.world.data.site("robot/grip").xmat[[0, 3]])
+                > PITCHED_HAND or not shelves_inside(self.spots, self.navigator.furniture.get(node), node, relation)):
+            return result
+        stood = self.set_down({a.furniture for a in self.world.articulations.values()})
+        if not stood.success:
+            return SkillResult(False, f"{result.reason}; then {stood.reason}")
+        at = self.observer.update().anchor_of(name, self.world.object_names)
+        again = self._pick.pick(name, at if at in self.navigator.furniture else None, node)
+        if not again.success:
+            return SkillResult(False, f"{result.reason}; set down, then pick: {again.reason}")
         return self._place.place(node, relation)
 
     def set_down(self, avoid: Collection[str] = (), tries: int = 3) -> SkillResult:
