@@ -42,6 +42,8 @@ LOW_SIDE_LIFT = 0.015  # m: or only this much where the wrist would come within 
 # compartment's top or the shelf above (a trash bag's tie 3.5 cm under a cabinet's top)
 ENTRY_OUT = 0.12  # m: a grasp inside furniture is entered from this far in front of its front plane
 ENTRY_STEP = 0.05  # m between checked configurations on the way in
+BACK_OFF = (0.15, 0.3)  # m a base holding an object backs away before the carry where the way to the carry point
+# touches something (`Arm.carry`)
 PASS_OVER = 0.03  # m between a carried object and a surface it is carried over before it is put down
 PULL_BASE_COST = 0.1  # IK damping on the base while drawing an object out: the base backs away
 LEAD_HEIGHTS = (0.15, 0.3)  # m above a grasp's entry point the arm may first swing to, then come down
@@ -343,10 +345,42 @@ class Arm:
 
     def carry(self) -> np.ndarray:
         """Move the held object to the carry point along `carry_path`, at CARRY_ARM_SPEED; returns the posture there
-        (shape (13,))."""
+        (shape (13,)). Where that way touches something with an object in the hand, the base first backs straight
+        away with the arm held as it is (`_backed_off`), and the way is planned again from there: a vegetable
+        lifted off a cutting board was carried down to the carry point against the knife block beside it (pushed
+        4 cm), right where the base stood."""
         path = self.carry_path()
+        if self.held is not None:
+            held = self.held_object(self.held)
+            if not all(self.clearance.clear(q, held=held) for q in path):
+                back = self._backed_off(held)
+                if back is not None:
+                    self.controller.move_through(back, speed=CARRY_ARM_SPEED)
+                    path = self.carry_path()
         self.controller.move_through(path, speed=CARRY_ARM_SPEED)
         return path[-1]
+
+    def _backed_off(self, held: Held) -> list[np.ndarray] | None:
+        """Configurations (each shape (13,)) that back the base straight away from where it faces, the arm and
+        the torso held as they are (the hand moves with the base), by the first of BACK_OFF m whose way is free
+        for the base and keeps the arm and `held` clear all along, checked every ENTRY_STEP m; None if none is."""
+        q0 = self.controller.target.copy()
+        heading = np.array([math.cos(q0[2]), math.sin(q0[2])])
+        obstacles = self.navigator.obstacles()
+        free = self.navigator.radius + CLEARANCE
+        for distance in BACK_OFF:
+            steps = max(1, int(np.ceil(distance / ENTRY_STEP)))
+            path = []
+            for s in np.linspace(0.0, 1.0, steps + 1)[1:]:
+                q = q0.copy()
+                q[:2] -= s * distance * heading
+                if not self.navigator.plan.disk_is_free(q[0], q[1], free, obstacles) or \
+                        not self.clearance.clear(q, held=held):
+                    break
+                path.append(q)
+            else:
+                return path
+        return None
 
     def carry_path(self) -> list[np.ndarray]:
         """Configurations (each shape (13,)) along a straight grip-site line from where the hand is to the carry
