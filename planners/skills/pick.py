@@ -259,7 +259,9 @@ class Pick:
         against `out`. With `replan`, once a failed grasp has moved the object (see `disturbed`), the grasps are
         planned again for where it now stands (the others were for where it stood)."""
         grasps, out, front = self._shelf_candidates(name, node, cls, position, quat, out)
-        rise = rise_to_pass(self.world, name, position, out, front) if np.isfinite(front) else 0.0
+        # over what stands in front of it on its shelf, or, on an open top, within the SIDE_PULL it is drawn out (a
+        # cereal box drawn out low across the dining table took the bowl in front of it along, 80 cm)
+        rise = rise_to_pass(self.world, name, position, out, front if np.isfinite(front) else SIDE_PULL)
         if not grasps:
             return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
         unreachable, failures = [], []
