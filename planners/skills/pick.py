@@ -75,10 +75,10 @@ class Pick:
 
     def pick(self, name: str, node: str | None = None, into: str | None = None) -> SkillResult:
         """Grasp object `name` and lift it LIFT m; `node` (the furniture it is on or in) is where to stand.
-        `into`: where it goes next; a cabinet's shelf takes an object held from the side or pitched down from the
-        front (a hand pointing straight down does not fit under the shelf above), so from a table it is then
-        grasped that way first. Standing on the floor, the object is no obstacle to the base poses that reach it
-        (`Navigator.exempt`)."""
+        `into`: where it goes next; a cabinet's shelf (or an open shelf's level under another) takes an object held
+        from the side or pitched down from the front (a hand pointing straight down does not fit under the shelf
+        above), so from a table it is then grasped that way first. Standing on the floor, the object is no
+        obstacle to the base poses that reach it (`Navigator.exempt`)."""
         self.navigator.exempt = frozenset({self.world.object_index(name)})
         try:
             return self._pick(name, node, into)
@@ -112,8 +112,9 @@ class Pick:
             if outcome.success or disturbed(position, quat, *self.world.object_pose(name)):
                 return outcome
             failures.append(outcome.reason.removeprefix(f"{name}: "))
-        if into is not None and furniture is not None and shelves_inside(self.spots, self.navigator.furniture.get(
-                into), into, None):  # from the side nearest where the robot would stand
+        if into is not None and furniture is not None and (shelves_inside(
+                self.spots, self.navigator.furniture.get(into), into, None) or covered_places(self.spots, into, None)
+                ):  # from the side nearest where the robot would stand (an open shelf's lower levels, too)
             try:
                 stand = np.array(self.navigator.stand_pose(node, tuple(position[:2]))[:2])
             except NavigationError as error:

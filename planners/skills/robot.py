@@ -25,7 +25,7 @@ from planners.motion.control import Controller
 from planners.motion.ik import IKSolver
 from planners.motion.navigation import Navigator
 from planners.skills.doors import PartMover
-from planners.skills.parts import rim_above, shelves_inside
+from planners.skills.parts import covered_places, rim_above, shelves_inside
 from planners.skills.pick import Pick
 from planners.skills.place import Place
 from planners.skills.result import SkillResult
@@ -98,14 +98,16 @@ class Robot:
 
     def place(self, node: str, relation: int | None = None) -> SkillResult:
         """Put the held object at a free spot ON or INSIDE furniture `node`, release it and retreat (see
-        `planners.skills.place.Place.place`). Where a shelf inside `node` took nothing from a hand pointing down
-        (the wrist meets the shelf above: a pill bottle picked from above off a crowded counter, a spoon off the
-        table), the object is set down on the nearest open top without a door, picked again as a shelf takes it
-        (`pick` with `into`: from the side or pitched, where a grasp fits there) and placed once more."""
+        `planners.skills.place.Place.place`). Where a shelf inside `node` (or a level under another,
+        `covered_places`) took nothing from a hand pointing down (the wrist meets the shelf above: a pill bottle
+        picked from above off a crowded counter, a spoon off the table), the object is set down on the nearest
+        open top without a door, picked again as a shelf takes it (`pick` with `into`: from the side or pitched,
+        where a grasp fits there) and placed once more."""
         result = self._place.place(node, relation)
         name = self.held
         if (result.success or name is None or np.linalg.norm(self.world.data.site("robot/grip").xmat[[0, 3]])
-                > PITCHED_HAND or not shelves_inside(self.spots, self.navigator.furniture.get(node), node, relation)):
+                > PITCHED_HAND or not (shelves_inside(self.spots, self.navigator.furniture.get(node), node, relation)
+                                       or covered_places(self.spots, node, relation))):
             return result
         stood = self.set_down({a.furniture for a in self.world.articulations.values()})
         if not stood.success:
