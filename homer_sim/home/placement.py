@@ -117,8 +117,9 @@ def pack_spot(place: Place, cls: ObjectClass, taken: list[tuple], step: float = 
     return None
 
 
-def cabinet_side_gap(layout: Layout, f: Furniture, level: int, place: Place) -> float:
-    """The gap (m) the start layout leaves beside each object inside cabinet `f` on its place `level`: ROW_GAP,
+def inside_side_gap(layout: Layout, f: Furniture, level: int, place: Place) -> float:
+    """The gap (m) the start layout leaves beside each object on place `level` inside `f` where a hand comes in
+    from the front (a cabinet's shelf, the shower's corner shelf; not a drawer, reached from above): ROW_GAP,
     a finger's room (a side grasp's pads open 1 cm past the object, its fingers 3.2 cm thick) also after the
     grasp suite shifts the object 2.5 cm, where the objects declared on that place fit side by side with that
     much room between them and the walls; else as much as they leave spread evenly, at least SPOT_GAP (the
@@ -196,9 +197,9 @@ def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
             # past the open door and the side walls
             # on an open top the robot's hand comes down from above: rows keep a finger's room between them where
             # the top has room for that
-            # inside a cabinet the hand comes in from the front: neighbours keep a finger's room beside them where
-            # the shelf has room for that (`cabinet_side_gap`)
-            side_gap = cabinet_side_gap(layout, f, k, place) if f.kind == "cabinet" and place.relation == INSIDE \
+            # inside furniture but for a drawer the hand comes in from the front: neighbours keep a finger's room
+            # beside them where the place has room for that (`inside_side_gap`)
+            side_gap = inside_side_gap(layout, f, k, place) if place.relation == INSIDE and place.part is None \
                 else SPOT_GAP
             for row_gap in (ROW_GAP, SPOT_GAP) if place.relation == ON else (SPOT_GAP,):
                 spot = pack_spot(place, cls, spots, lengthwise=long, centre_first=f.kind == "cabinet",
