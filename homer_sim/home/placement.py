@@ -117,16 +117,31 @@ def pack_spot(place: Place, cls: ObjectClass, taken: list[tuple], step: float = 
     return None
 
 
-def cabinet_side_gap(layout: Layout, f: Furniture, level: int, place: Place) -> float:
-    """The gap (m) the start layout leaves beside each object inside cabinet `f` on its place `level`: ROW_GAP,
+@cache
+def inside_side_gap(layout: Layout, f: Furniture, level: int, place: Place) -> float:
+    """The gap (m) the start layout leaves beside each object on place `level` inside `f` where a hand comes in
+    from the front (a cabinet's shelf, the shower's corner shelf; not a drawer, reached from above): ROW_GAP,
     a finger's room (a side grasp's pads open 1 cm past the object, its fingers 3.2 cm thick) also after the
     grasp suite shifts the object 2.5 cm, where the objects declared on that place fit side by side with that
     much room between them and the walls; else as much as they leave spread evenly, at least SPOT_GAP (the
-    cheese packed 2.5 cm beside the milk left the fingers no room)."""
-    widths = [CATALOG[o.cls].size[1] if lengthwise(f, place, CATALOG[o.cls]) else CATALOG[o.cls].size[0]
-              for o in layout.objects if o.parent == f.name and o.level == level]
+    cheese packed 2.5 cm beside the milk left the fingers no room); less in 5 mm steps where, packed on the 1 cm
+    grid of `pack_spot`, one of them would leave the front row that SPOT_GAP keeps it in (spread evenly, 4.2 cm
+    apart, the dry pasta went behind the oil on the cupboard's bottom shelf, reached only over it)."""
+    objects = [CATALOG[o.cls] for o in layout.objects if o.parent == f.name and o.level == level]
+    widths = [cls.size[1] if lengthwise(f, place, cls) else cls.size[0] for cls in objects]
     spare = 2 * place.half_xy[1] - sum(widths)
-    return min(ROW_GAP, max(SPOT_GAP, spare / (len(widths) + 1)))
+    front = place.center[0] + place.half_xy[0]
+
+    def in_front(gap: float) -> int:
+        taken: list[tuple] = []
+        for cls in objects:
+            long = lengthwise(f, place, cls)
+            if pack_spot(place, cls, taken, lengthwise=long, centre_first=f.kind == "cabinet", side_gap=gap) is None:
+                pack_spot(place, cls, taken, lengthwise=long, side_gap=gap)
+        return sum(rect[2] > front - 1e-6 for rect in taken)
+
+    widest, least = min(ROW_GAP, max(SPOT_GAP, spare / (len(widths) + 1))), in_front(SPOT_GAP)
+    return next((float(gap) for gap in np.arange(widest, SPOT_GAP, -0.005) if in_front(gap) >= least), SPOT_GAP)
 
 
 def _candidate_places(f: Furniture, decl: ObjectDecl) -> list[tuple[int, Place]]:
@@ -196,9 +211,9 @@ def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
             # past the open door and the side walls
             # on an open top the robot's hand comes down from above: rows keep a finger's room between them where
             # the top has room for that
-            # inside a cabinet the hand comes in from the front: neighbours keep a finger's room beside them where
-            # the shelf has room for that (`cabinet_side_gap`)
-            side_gap = cabinet_side_gap(layout, f, k, place) if f.kind == "cabinet" and place.relation == INSIDE \
+            # inside furniture but for a drawer the hand comes in from the front: neighbours keep a finger's room
+            # beside them where the place has room for that (`inside_side_gap`)
+            side_gap = inside_side_gap(layout, f, k, place) if place.relation == INSIDE and place.part is None \
                 else SPOT_GAP
             for row_gap in (ROW_GAP, SPOT_GAP) if place.relation == ON else (SPOT_GAP,):
                 spot = pack_spot(place, cls, spots, lengthwise=long, centre_first=f.kind == "cabinet",

@@ -101,27 +101,28 @@ def test_rows_on_an_open_top_leave_a_finger_between_them() -> None:
     assert pack_spot(shallow, rack, taken, row_gap=SPOT_GAP) is not None
 
 
-def test_neighbours_in_a_cabinet_leave_a_finger_between_them() -> None:
-    """Inside a cabinet the start layout keeps `cabinet_side_gap` beside each object: ROW_GAP where the shelf's
-    objects fit side by side so (the cheese packed 2.5 cm beside the milk left a side grasp's finger no room), as
-    much as they leave spread evenly where they do not, never under SPOT_GAP."""
+def test_neighbours_reached_from_the_front_leave_a_finger_between_them() -> None:
+    """Inside furniture, but for a drawer, the start layout keeps `inside_side_gap` beside each object: ROW_GAP
+    where the place's objects fit side by side so (the cheese packed 2.5 cm beside the milk left a side grasp's
+    finger no room), as much as they leave spread evenly where they do not (the shower's corner shelf), never under
+    SPOT_GAP."""
     import itertools
     import math
 
     from homer_sim.home.catalog import CATALOG
     from homer_sim.home.furniture import furniture_geometry
-    from homer_sim.home.placement import ROW_GAP, SPOT_GAP, cabinet_side_gap, lengthwise, start_poses
+    from homer_sim.home.placement import ROW_GAP, SPOT_GAP, inside_side_gap, lengthwise, start_poses
 
     layout = default_layout()
     poses = start_poses(layout)
     furniture = layout.furniture_by_name()
     checked = 0
-    for f in (f for f in layout.furniture if f.kind == "cabinet"):
+    for f in layout.furniture:
         for level, place in enumerate(furniture_geometry(f).places):
             objects = [o for o in layout.objects if o.parent == f.name and o.level == level]
-            if place.relation != INSIDE or len(objects) < 2:
+            if place.relation != INSIDE or place.part is not None or len(objects) < 2:
                 continue
-            gap = cabinet_side_gap(layout, f, level, place)
+            gap = inside_side_gap(layout, f, level, place)
             assert SPOT_GAP <= gap <= ROW_GAP
             c, s = math.cos(furniture[f.name].yaw), math.sin(furniture[f.name].yaw)
             boxes = []  # (from, to) across the cabinet's width, (from, to) along its depth
