@@ -73,6 +73,18 @@ def test_pick_refuses_an_object_lying_on_its_side_without_touching_anything() ->
     assert np.abs(robot.controller.q() - arm).max() < 1e-6
 
 
+def test_pick_for_a_room_floor_takes_the_object() -> None:
+    """A pick whose next destination is a room (a free spot of its floor) plans as for any top: the side-first
+    check for shelves asked the room for its fixed places and raised KeyError, ending a whole assisted day."""
+    world = World(extras=[add_robot])
+    world.settle()
+    robot = Robot(world, np.random.default_rng(0))
+    assert robot.observer.observe_all().parent_of("food_bread") == "kitchen_counter_left"
+    result = robot.pick("food_bread", into="dining_room")
+    assert result.success, result.reason
+    assert robot.held == "food_bread"
+
+
 def test_unfold_check_sees_the_table_top_the_folded_elbow_swings_over() -> None:
     """Beside the dining table, arm side towards it, the unfold from the tuck sticks on the table top: the check
     says so before the robot goes there; turned the other way round the arm unfolds freely, and the check agrees."""
