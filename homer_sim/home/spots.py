@@ -145,9 +145,10 @@ class Spots:
 
     def places_of(self, node: str, relation: int | None) -> list[tuple[int, Place]]:
         """Places of furniture `node` with `relation`. None means as the furniture is used: inside what is
-        built to hold things inside (cabinets, appliances with doors, sinks, showers), else on top."""
+        built to hold things inside (cabinets, appliances with doors, sinks, showers), else on top. Empty for
+        a node without fixed places (a room: its floor is searched for a free spot instead)."""
         places = list(enumerate(self._places.get(node, [])))
-        if relation is None:
+        if relation is None and places:
             first = INSIDE if self.furniture[node].kind in CONTAINER_KINDS else ON
             preferred = [(k, p) for k, p in places if p.relation == first]
             return preferred or places

@@ -112,9 +112,8 @@ class Pick:
             if outcome.success or disturbed(position, quat, *self.world.object_pose(name)):
                 return outcome
             failures.append(outcome.reason.removeprefix(f"{name}: "))
-        destination = self.navigator.furniture.get(into) if into is not None else None  # None for a room's floor
-        if furniture is not None and destination is not None and (shelves_inside(
-                self.spots, destination, into, None) or covered_places(self.spots, into, None)
+        if into is not None and furniture is not None and (shelves_inside(
+                self.spots, self.navigator.furniture.get(into), into, None) or covered_places(self.spots, into, None)
                 ):  # from the side nearest where the robot would stand (an open shelf's lower levels, too)
             try:
                 stand = np.array(self.navigator.stand_pose(node, tuple(position[:2]))[:2])

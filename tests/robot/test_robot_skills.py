@@ -75,11 +75,13 @@ def test_pick_refuses_an_object_lying_on_its_side_without_touching_anything() ->
 
 def test_pick_for_a_room_floor_takes_the_object() -> None:
     """A pick whose next destination is a room (a free spot of its floor) plans as for any top: the side-first
-    check for shelves asked the room for its fixed places and raised KeyError, ending a whole assisted day."""
+    check for shelves asked the room for its fixed places, `Spots.places_of` raised KeyError for it, and that ended
+    a whole assisted evaluation."""
     world = World(extras=[add_robot])
     world.settle()
     robot = Robot(world, np.random.default_rng(0))
     assert robot.observer.observe_all().parent_of("food_bread") == "kitchen_counter_left"
+    assert robot.spots.places_of("dining_room", None) == []  # a room has no fixed places (a place there asks too)
     result = robot.pick("food_bread", into="dining_room")
     assert result.success, result.reason
     assert robot.held == "food_bread"
