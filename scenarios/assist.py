@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from homer_sim.errors import PhysicsError
 from homer_sim.graph import ON, SceneGraph
 from homer_sim.person.executor import DayLog, Executor
 from homer_sim.world import World
@@ -26,6 +27,7 @@ from planners.motion.navigation import IN_THE_WAY, NavigationError
 from planners.robot import DEFAULT_POSE
 from planners.skills import Robot, SkillResult
 from planners.skills.parts import parts_to_open
+from scenarios.causes import SKILL_ERROR
 from scenarios.psi import PlanStep, Relocation, anchor_of, plan_steps
 
 log = logging.getLogger(__name__)
@@ -164,7 +166,15 @@ class Helper:
             now = minute + (float(self.world.data.time) - started) / 60.0
             if self.recording is not None:
                 self.recording.set_routine_time(now)
-            result = self._run(step, failed_containers, picked, by_obj, minute)
+            try:
+                result = self._run(step, failed_containers, picked, by_obj, minute)
+            except PhysicsError:
+                raise
+            except Exception as error:  # a bug in a skill fails this step's relocation, not the whole day
+                log.exception("robot %s %s", step.action, step.target)
+                result = SkillResult(False, f"{SKILL_ERROR} in {step.action}: {type(error).__name__} {error}")
+                if step.obj and self.robot.held == step.obj:
+                    self._put_down(step.obj, by_obj[step.obj].source)
             if result is None:
                 continue
             self.log.steps.append(StepOutcome(now, step, result.success, result.reason,

@@ -6,6 +6,9 @@ went wrong. The table is ordered: the first pattern found in the reason names th
 
 from __future__ import annotations
 
+SKILL_ERROR = "skill error"
+"""How the assisted day words a skill that raised (a bug): the relocation fails with the exception named."""
+
 CAUSE_PATTERNS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("in the person's hand", ("in the person's hand",)),
     ("not graspable", ("not graspable",)),
@@ -23,6 +26,7 @@ CAUSE_PATTERNS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("every grasp failed", ("every grasp",)),
     ("the person in the way", ("someone is in the way",)),
     ("knocked off later", ("knocked off",)),
+    ("skill error", (SKILL_ERROR,)),
 )
 LASTING = ("lies fallen over",)
 """Causes in the object's own state where it lies: trying again before someone has moved it fails the same way."""

@@ -128,3 +128,39 @@ def test_a_relocation_knocked_off_later_in_the_turn_is_not_done(world) -> None:
     knocked, still = helper.log.relocations
     assert not knocked.done and cause_of(knocked.reason) == "knocked off later" and knocked.ended_on == "dining_room"
     assert still.done and still.ended_on == "table_dining_room"
+
+
+def test_a_skill_that_raises_fails_its_relocation_and_the_turn_goes_on(world) -> None:
+    """A bug in a skill (here pick raising KeyError for the bowl) is that relocation's failure with the exception
+    named, not the end of the day: the milk's relocation after it is still carried out."""
+    from types import SimpleNamespace
+
+    from homer_sim.observe import SceneGraphObserver
+    from planners.skills import SkillResult
+    from scenarios.assist import AssistLog, Helper
+    from scenarios.psi import PlanStep, Relocation
+
+    def pick(obj: str, node: str, into: str) -> SkillResult:
+        if obj == bowl.obj:
+            raise KeyError("dining_room")
+        robot.held = obj
+        return SkillResult(True)
+
+    def place(target: str) -> SkillResult:
+        robot.held = None
+        return SkillResult(True)
+
+    helper = Helper.__new__(Helper)  # the turn's bookkeeping only: the skills are the two above
+    helper.world, helper.recording, helper.log, helper.waiting, helper._placed_at = world, None, AssistLog(), [], {}
+    robot = helper.robot = SimpleNamespace(observer=SceneGraphObserver(world), held=None, pick=pick, place=place)
+    bowl, milk = (Relocation("bowl", "cupboard", "table_dining_room", 1, 0.9),
+                  Relocation("milk", "fridge", "table_dining_room", 1, 0.9))
+    steps = [PlanStep("pick", r.obj, r.source, r.obj) for r in (bowl, milk)]
+    steps = [steps[0], PlanStep("place", bowl.destination, bowl.destination, "bowl"), steps[1],
+             PlanStep("place", milk.destination, milk.destination, "milk")]
+    helper._carry_out(steps, [bowl, milk], 360, float(world.data.time))
+    failed, carried = helper.log.relocations
+    assert failed.relocation == bowl and not failed.done and cause_of(failed.reason) == "skill error"
+    assert "KeyError" in failed.reason
+    assert carried.relocation == milk and carried.done
+    assert [s.success for s in helper.log.steps] == [False, True, True]
