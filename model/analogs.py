@@ -20,6 +20,9 @@ with many days the analogs outweigh it. Tunables (sigma_min, lambda, stay_prior,
 by the rule every method's are (model.evaluate), on up to CV_DAYS training days each left out of the fit it is
 scored with (fitting is only storing days), and the predictor is then fitted on all training days. Training stores
 the days' movable parents (int16); nothing is learned by gradient.
+
+The decision threshold applies to the margin of the most likely destination over all the others (`_with_margin`),
+not to its probability: a move split between several places is predicted as no move.
 """
 
 from __future__ import annotations
@@ -141,7 +144,7 @@ class Analogs(Predictor):
         for b in range(len(parent)):
             probs[:, b, self.rows] = self.forecast(parent[b], float(minute[b]), steps,
                                                    None if backoff is None else backoff[:, b])
-        return self._finish(parent, [summarise_step(p, parent) for p in probs])
+        return self._finish(parent, [_with_margin(p, parent) for p in probs])
 
     def _backoff(self, probs: np.ndarray, minute: np.ndarray, steps: int) -> np.ndarray | None:
         """The chain's forecast of the movable objects from probs (B, N, N) observed at `minute` (B,): Shape
@@ -164,3 +167,17 @@ class Analogs(Predictor):
             out[b, self.rows] = self.forecast(parent[b], float(observed[b]), 1,
                                               None if backoff is None else backoff[:, b])[0]
         return out
+
+
+def _with_margin(probs: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, ...]:
+    """`summarise_step` of probs (B, N, N), with the best other parent's confidence replaced by its margin over
+    every other destination: p_d - (1 - p_stay - p_d), clipped at 0.
+
+    That margin is what acting on the move is worth in expectation when a right destination counts as much as a
+    wrong one (the paper objective and F1 alike): when an object's move is likely but split between places (dishes
+    leaving the dishwasher for the cupboard or the table), p_d alone would clear a low threshold while a wrong
+    destination is about as likely as the right one; the margin stays low and the object is predicted to stay. The
+    decision threshold (model.metrics.gate) applies to the margin, tuned on validation days as before."""
+    best, confidence, other, other_confidence = summarise_step(probs, observed)
+    stay = np.take_along_axis(probs, np.maximum(observed, 0)[..., None], axis=-1)[..., 0]
+    return best, confidence, other, np.maximum(2.0 * other_confidence + stay - 1.0, 0.0)

@@ -59,7 +59,7 @@ MIN_ACT_STEPS = 2  # the robot's act_steps is at least this: a robot acting only
 # step acts at the very tick the person starts (its minutes of work make them wait, which the replay does not see:
 # the table is set as breakfast starts, not before)
 CV_DAYS = 10  # cross-validated methods: training days held out in turn (all of them when there are fewer)
-TUNING_VERSION = 7  # bump when the tuning rule or a grid changes: cached tunings are then redone
+TUNING_VERSION = 8  # bump when the tuning rule or a grid changes: cached tunings are then redone
 TARGETS = ("paper", "f1", "assist")  # what tunables are chosen for: the paper's objective, relocation F1, or
 # the assistance objective (fetches a robot acting on the predictions makes ahead, minus its wrong moves)
 QUERY_CHUNK = 128  # queries per rollout call, bounds memory of the dense (B, N, N) probabilities

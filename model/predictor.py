@@ -71,7 +71,8 @@ class Rollout:
     parent: Shape (S, B, N) int64, argmax of step s + 1's probabilities (static nodes keep their parent).
     confidence: Shape (S, B, N) float32, the probability of that parent.
     other: Shape (S, B, N) int64, the most likely parent other than the one observed at the query step.
-    other_confidence: Shape (S, B, N) float32, its probability (0 for static nodes).
+    other_confidence: Shape (S, B, N) float32, its probability (0 for static nodes); `analogs` gives its margin
+    over the other destinations instead (model.analogs).
     """
 
     parent: np.ndarray
