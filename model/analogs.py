@@ -21,13 +21,15 @@ by the rule every method's are (model.evaluate), on up to CV_DAYS training days 
 scored with (fitting is only storing days), and the predictor is then fitted on all training days. Training stores
 the days' movable parents (int16); nothing is learned by gradient.
 
-The decision threshold applies to the margin of the most likely destination over all the others (`_with_margin`),
-not to its probability: a move split between several places is predicted as no move.
+For the paper's objective and the robot, the decision threshold applies to the margin of the most likely
+destination over all the others (`_margin`), not to its probability: a move split between several places is
+predicted as no move.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -144,7 +146,8 @@ class Analogs(Predictor):
         for b in range(len(parent)):
             probs[:, b, self.rows] = self.forecast(parent[b], float(minute[b]), steps,
                                                    None if backoff is None else backoff[:, b])
-        return self._finish(parent, [_with_margin(p, parent) for p in probs])
+        rollout = self._finish(parent, [summarise_step(p, parent) for p in probs])
+        return replace(rollout, other_margin=_margin(probs, parent, rollout.other_confidence, self.movable))
 
     def _backoff(self, probs: np.ndarray, minute: np.ndarray, steps: int) -> np.ndarray | None:
         """The chain's forecast of the movable objects from probs (B, N, N) observed at `minute` (B,): Shape
@@ -169,15 +172,17 @@ class Analogs(Predictor):
         return out
 
 
-def _with_margin(probs: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, ...]:
-    """`summarise_step` of probs (B, N, N), with the best other parent's confidence replaced by its margin over
-    every other destination: p_d - (1 - p_stay - p_d), clipped at 0.
 
-    That margin is what acting on the move is worth in expectation when a right destination counts as much as a
-    wrong one (the paper objective and F1 alike): when an object's move is likely but split between places (dishes
-    leaving the dishwasher for the cupboard or the table), p_d alone would clear a low threshold while a wrong
-    destination is about as likely as the right one; the margin stays low and the object is predicted to stay. The
-    decision threshold (model.metrics.gate) applies to the margin, tuned on validation days as before."""
-    best, confidence, other, other_confidence = summarise_step(probs, observed)
-    stay = np.take_along_axis(probs, np.maximum(observed, 0)[..., None], axis=-1)[..., 0]
-    return best, confidence, other, np.maximum(2.0 * other_confidence + stay - 1.0, 0.0)
+def _margin(probs: np.ndarray, observed: np.ndarray, other: np.ndarray, movable: np.ndarray) -> np.ndarray:
+    """The best other parent's margin over every other destination, p_d - (1 - p_stay - p_d) clipped at 0, from
+    probs (S, B, N, N), observed parents (B, N) and p_d (S, B, N): Shape (S, B, N), 0 for static nodes.
+
+    That margin is what acting on the move is worth in expectation where a wrong destination costs as much as a
+    right one gains (the paper's objective, the robot's wrong moves): when an object's move is likely but split
+    between places (dishes leaving the dishwasher for the cupboard or the table), p_d alone clears a low threshold
+    while a wrong destination is about as likely as the right one; the margin stays low and the object is predicted
+    to stay. Those rules gate on it (model.metrics.gate); F1, where a wrong destination only adds a false positive
+    to a miss, gates on p_d."""
+    index = np.broadcast_to(np.maximum(observed, 0)[None, ..., None], (*probs.shape[:-1], 1))
+    stay = np.take_along_axis(probs, index, axis=-1)[..., 0]
+    return np.where(movable, np.maximum(2.0 * other + stay - 1.0, 0.0), 0.0).astype(np.float32)

@@ -122,4 +122,4 @@ def test_a_move_split_between_two_places_is_predicted_as_no_move() -> None:
         predictor = Analogs(meta, sigma_min=10.0, similarity=0.5, stay_prior=0.1, threshold=0.3)
         predictor.fit([day(i, split) for i in range(8)], [])
         out = predictor.rollout(*query, 1)
-        assert (gate(out, query[0], 0.3)[0, 0, CUP] != SHELF) == moves, split
+        assert (gate(out, query[0], 0.3, margin=True)[0, 0, CUP] != SHELF) == moves, split
