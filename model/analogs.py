@@ -20,11 +20,16 @@ with many days the analogs outweigh it. Tunables (sigma_min, lambda, stay_prior,
 by the rule every method's are (model.evaluate), on up to CV_DAYS training days each left out of the fit it is
 scored with (fitting is only storing days), and the predictor is then fitted on all training days. Training stores
 the days' movable parents (int16); nothing is learned by gradient.
+
+For the paper's objective and the robot, the decision threshold applies to the margin of the most likely
+destination over all the others (`_margin`), not to its probability: a move split between several places is
+predicted as no move.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -141,7 +146,8 @@ class Analogs(Predictor):
         for b in range(len(parent)):
             probs[:, b, self.rows] = self.forecast(parent[b], float(minute[b]), steps,
                                                    None if backoff is None else backoff[:, b])
-        return self._finish(parent, [summarise_step(p, parent) for p in probs])
+        rollout = self._finish(parent, [summarise_step(p, parent) for p in probs])
+        return replace(rollout, other_margin=_margin(probs, parent, rollout.other_confidence, self.movable))
 
     def _backoff(self, probs: np.ndarray, minute: np.ndarray, steps: int) -> np.ndarray | None:
         """The chain's forecast of the movable objects from probs (B, N, N) observed at `minute` (B,): Shape
@@ -164,3 +170,19 @@ class Analogs(Predictor):
             out[b, self.rows] = self.forecast(parent[b], float(observed[b]), 1,
                                               None if backoff is None else backoff[:, b])[0]
         return out
+
+
+
+def _margin(probs: np.ndarray, observed: np.ndarray, other: np.ndarray, movable: np.ndarray) -> np.ndarray:
+    """The best other parent's margin over every other destination, p_d - (1 - p_stay - p_d) clipped at 0, from
+    probs (S, B, N, N), observed parents (B, N) and p_d (S, B, N): Shape (S, B, N), 0 for static nodes.
+
+    That margin is what acting on the move is worth in expectation where a wrong destination costs as much as a
+    right one gains (the paper's objective, the robot's wrong moves): when an object's move is likely but split
+    between places (dishes leaving the dishwasher for the cupboard or the table), p_d alone clears a low threshold
+    while a wrong destination is about as likely as the right one; the margin stays low and the object is predicted
+    to stay. Those rules gate on it (model.metrics.gate); F1, where a wrong destination only adds a false positive
+    to a miss, gates on p_d."""
+    index = np.broadcast_to(np.maximum(observed, 0)[None, ..., None], (*probs.shape[:-1], 1))
+    stay = np.take_along_axis(probs, index, axis=-1)[..., 0]
+    return np.where(movable, np.maximum(2.0 * other + stay - 1.0, 0.0), 0.0).astype(np.float32)

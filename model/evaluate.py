@@ -59,7 +59,7 @@ MIN_ACT_STEPS = 2  # the robot's act_steps is at least this: a robot acting only
 # step acts at the very tick the person starts (its minutes of work make them wait, which the replay does not see:
 # the table is set as breakfast starts, not before)
 CV_DAYS = 10  # cross-validated methods: training days held out in turn (all of them when there are fewer)
-TUNING_VERSION = 7  # bump when the tuning rule or a grid changes: cached tunings are then redone
+TUNING_VERSION = 8  # bump when the tuning rule or a grid changes: cached tunings are then redone
 TARGETS = ("paper", "f1", "assist")  # what tunables are chosen for: the paper's objective, relocation F1, or
 # the assistance objective (fetches a robot acting on the predictions makes ahead, minus its wrong moves)
 QUERY_CHUNK = 128  # queries per rollout call, bounds memory of the dense (B, N, N) probabilities
@@ -76,7 +76,8 @@ def split_days(days: Sequence[Day], val_fraction: float = VAL_FRACTION) -> tuple
 def _joined(parts: Sequence, axis: int = 0):
     """Rollouts (joined along the query axis, 1) or Queries (axis 0): each field of `parts` concatenated."""
     kind = type(parts[0])
-    return kind(*(np.concatenate([getattr(p, f.name) for p in parts], axis=axis) for f in fields(kind)))
+    return kind(*(None if getattr(parts[0], f.name) is None else
+                  np.concatenate([getattr(p, f.name) for p in parts], axis=axis) for f in fields(kind)))
 
 
 def rollout_queries(predictor: Predictor, queries: Queries, steps: int) -> Rollout:
@@ -118,11 +119,12 @@ def tune_targets(predictor: Predictor, queries: Queries | Sequence[tuple[Predict
             fold.set_params(**dict(zip(names, values, strict=True)))
         rollout = _joined([rollout_queries(fold, q, steps) for fold, q in folds], axis=1)
         for threshold in thresholds:
-            predicted = gate(rollout, queries.observed, threshold)
+            predicted = {margin: gate(rollout, queries.observed, threshold, margin)
+                         for margin in {uses_margin(t) for t in targets}}
             params = {**dict(zip(names, values, strict=True)), "threshold": float(threshold)}
             for target, rows in scored.items():
-                for rule, (admissible, value) in _tuning_scores(target, queries, predicted, steps, predictor.movable,
-                                                                outside):
+                for rule, (admissible, value) in _tuning_scores(target, queries, predicted[uses_margin(target)], steps,
+                                                                predictor.movable, outside):
                     rows.append((admissible, value, -len(rows), params | rule))
     best = {}
     for target, rows in scored.items():
@@ -130,6 +132,11 @@ def tune_targets(predictor: Predictor, queries: Queries | Sequence[tuple[Predict
         best[target] = (params, objective)
     predictor.set_params(**best[targets[-1]][0])
     return {t: (dict(predictor.params) | p, v) for t, (p, v) in best.items()}
+
+
+def uses_margin(target: str) -> bool:
+    """Whether `target`'s decisions gate on the rollout's margin (model.metrics.gate): all but F1."""
+    return target != "f1"
 
 
 def _tuning_scores(target: str, queries: Queries, predicted: np.ndarray, steps: int, movable: np.ndarray,
@@ -341,7 +348,7 @@ def score_windows(predictor: Predictor, queries: Queries, windows_min: Sequence[
     """Per window: (counts with every movable node as unused pool, counts with the household's used objects)."""
     steps = [window_steps(w, grid_min) for w in windows_min]
     rollout = rollout_queries(predictor, queries, max(steps))
-    predicted = gate(rollout, queries.observed, predictor.params["threshold"])
+    predicted = gate(rollout, queries.observed, predictor.params["threshold"], margin=uses_margin("paper"))
     return {w: (score(queries, predicted, s, predictor.movable), score(queries, predicted, s, predictor.movable, pool))
             for w, s in zip(windows_min, steps, strict=True)}
 
@@ -415,7 +422,8 @@ def score_household(test: tuple[list[Day], np.ndarray], window_min: int, predict
 def f1_result(predictor: Predictor, days: Sequence[Day]) -> dict:
     """SLaTe-PRO's relocation F1 of a tuned predictor on `days` (RelocationCounts.summary, plus its params)."""
     queries = day_queries(days, F1_STEPS)
-    predicted = gate(rollout_queries(predictor, queries, F1_STEPS), queries.observed, predictor.params["threshold"])
+    predicted = gate(rollout_queries(predictor, queries, F1_STEPS), queries.observed, predictor.params["threshold"],
+                     margin=uses_margin("f1"))
     return {**relocation_counts(queries, predicted, predictor.movable).summary(), "params": dict(predictor.params)}
 
 

@@ -60,18 +60,22 @@ def day_queries(days: Sequence[Day], steps: int) -> Queries:
                    np.concatenate(future).astype(np.int64), np.concatenate(valid).astype(np.int64))
 
 
-def gate(rollout: Rollout, observed: np.ndarray, threshold: float) -> np.ndarray:
+def gate(rollout: Rollout, observed: np.ndarray, threshold: float, margin: bool = False) -> np.ndarray:
     """The decision rule: predicted parents (Q, S, N) from a rollout of Shape (S, Q, N).
 
     threshold 0: the per-node argmax of each step (the paper). threshold t > 0: a node is predicted to move to the
     most likely parent other than the observed one once that parent's probability reaches t, else to stay; for
-    t >= 0.5 this is the argmax, counted only when its probability reaches t. observed: Shape (Q, N).
+    t >= 0.5 this is the argmax, counted only when its probability reaches t. observed: Shape (Q, N). margin: where
+    a wrong destination costs as much as a right one gains (the paper's objective and the robot's; not F1, where a
+    wrong destination only adds a false positive to a miss), t applies to the rollout's `other_margin` instead, if
+    it has one: the expected gain of acting on the move.
     """
     observed = np.asarray(observed)[None]
     if threshold <= 0.0:
         gated = rollout.parent
     else:
-        gated = np.where(rollout.other_confidence >= threshold, rollout.other, observed)
+        confidence = rollout.other_margin if margin and rollout.other_margin is not None else rollout.other_confidence
+        gated = np.where(confidence >= threshold, rollout.other, observed)
     return np.transpose(gated, (1, 0, 2))
 
 

@@ -72,12 +72,16 @@ class Rollout:
     confidence: Shape (S, B, N) float32, the probability of that parent.
     other: Shape (S, B, N) int64, the most likely parent other than the one observed at the query step.
     other_confidence: Shape (S, B, N) float32, its probability (0 for static nodes).
+    other_margin: Shape (S, B, N) float32 or None: its margin over every other destination, for the decision rules
+    where a wrong destination costs as much as a right one gains (model.metrics.gate); None: they use its
+    probability. `analogs` gives it (model.analogs).
     """
 
     parent: np.ndarray
     confidence: np.ndarray
     other: np.ndarray
     other_confidence: np.ndarray
+    other_margin: np.ndarray | None = None
 
 
 def summarise_step(probs: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, ...]:

@@ -128,10 +128,11 @@ def first_moves(observed: np.ndarray, rollout: Rollout, threshold: float, window
     observed: Shape (N,) int, parents at the query step. rollout: arrays of Shape (S, B, N); `batch` picks the query.
     Returns changed (N,) bool, destination (N,) int (-1 where unchanged), step (N,) int (1-based, 0 where unchanged).
     """
-    one = Rollout(*(np.asarray(a)[:, batch : batch + 1] for a in (rollout.parent, rollout.confidence, rollout.other,
-                                                                   rollout.other_confidence)))
+    one = Rollout(*(None if a is None else np.asarray(a)[:, batch : batch + 1]
+                    for a in (rollout.parent, rollout.confidence, rollout.other, rollout.other_confidence,
+                              rollout.other_margin)))
     observed = np.asarray(observed, dtype=np.int64)[None]
-    predicted = gate(one, observed, threshold)  # (1, S, N)
+    predicted = gate(one, observed, threshold, margin=True)  # (1, S, N); thresholds tuned on the margin (paper, assist)
     steps = np.array([min(window_steps, predicted.shape[1])])
     changed, destination = first_change(observed, predicted, steps)
     differs = predicted[0] != observed  # (S, N)

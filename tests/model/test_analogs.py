@@ -14,6 +14,7 @@ from homer_sim.data.dataset import DatasetMeta, Day
 from model.analogs import Analogs
 from model.markov import TimedMarkov
 from model.methods import load_predictor, save_predictor
+from model.metrics import gate
 
 META = DatasetMeta(("kitchen", "table", "shelf", "cup", "bowl"), ("room", "furniture", "furniture", "object",
                                                                    "object"), (False, False, False, True, True), ("h",))
@@ -80,7 +81,6 @@ def test_tuning_holds_each_validation_day_out_of_its_fit_then_fits_all_days() ->
     assert info["tunings"]["paper@30"]["val_score"] > 50.0
 
 
-
 def test_the_chain_backoff_foresees_a_move_in_an_arrangement_never_seen() -> None:
     # A book that always sat on the shelf lies on the table: no stored step resembles that arrangement, and with a
     # high lambda the analogs count for nothing, so alone they keep the bowl in place. The chain has seen the bowl
@@ -101,3 +101,25 @@ def test_the_chain_backoff_foresees_a_move_in_an_arrangement_never_seen() -> Non
         assert out.parent[1, 0, book] == TABLE
         confidence[backoff] = float(out.other_confidence[1, 0, BOWL]) if out.other[1, 0, BOWL] == TABLE else 0.0
     assert confidence[0.0] < 0.01 and confidence[1.0] > 0.05
+
+
+def test_a_move_split_between_two_places_is_predicted_as_no_move() -> None:
+    # The cup leaves the shelf at 08:00 every day: for the table on even days, for a counter on odd days. The move
+    # is certain, each destination a coin toss: the threshold applies to the best destination's margin over the
+    # other, which is about 0, so the cup is predicted to stay; when every day it goes to the table, it is not.
+    meta = DatasetMeta((*META.nodes, "counter"), (*META.categories, "furniture"), (*META.movable, False), ("h",))
+    counter = 5
+
+    def day(index: int, split: bool) -> Day:
+        base = _day(0)
+        parent = np.column_stack([base.parent, np.zeros(len(MINUTES), np.int16)])
+        parent[:, BOWL] = SHELF
+        parent[(MINUTES >= 480) & (MINUTES < 540), CUP] = counter if split and index % 2 else TABLE
+        return Day("h", "train", index, MINUTES, parent, np.where(parent < 0, 0, 1).astype(np.int8))
+
+    query = np.array([[-1, 0, 0, SHELF, SHELF, 0]]), np.array([470.0])
+    for split, moves in ((True, False), (False, True)):
+        predictor = Analogs(meta, sigma_min=10.0, similarity=0.5, stay_prior=0.1, threshold=0.3)
+        predictor.fit([day(i, split) for i in range(8)], [])
+        out = predictor.rollout(*query, 1)
+        assert (gate(out, query[0], 0.3, margin=True)[0, 0, CUP] != SHELF) == moves, split

@@ -84,7 +84,7 @@ def test_the_robots_predictor_is_the_tables_choice_tuned_for_assistance_on_valid
 
     def robot(params: dict[str, float]) -> tuple[bool, int]:
         predictor.set_params(**params)
-        predicted = gate(rollout_queries(predictor, queries, steps), queries.observed, params["threshold"])
+        predicted = gate(rollout_queries(predictor, queries, steps), queries.observed, params["threshold"], margin=True)
         counts = robot_counts(queries, predicted, steps, predictor.movable, int(params["act_steps"]))
         return counts.wrong <= MAX_ROBOT_WRONG_PCT / 100 * counts.relocations, counts.assistance()
 
