@@ -69,13 +69,15 @@ def rise_to_pass(world, name: str, position: np.ndarray, out: np.ndarray, front:
 
 def tallest_beside(world, name: str, xy: np.ndarray, surface_z: float, radius: float) -> float:
     """The highest top (m) of the objects other than `name` standing on the surface at `surface_z` (m; their bottom
-    within LEVEL_OVERLAP of it) with their centre within `radius` m of `xy` (m, world); `surface_z` where none does."""
+    within LEVEL_OVERLAP of it) or lower (on the furniture a cutting board lies on: the knife block beside the board
+    was not counted for a vegetable going onto the board, and the carried vegetable was driven into it) with their
+    centre within `radius` m of `xy` (m, world); `surface_z` where none does."""
     highest = surface_z
     for decl in world.layout.objects:
         if decl.name == name:
             continue
         other, _ = world.object_pose(decl.name)
         half = CATALOG[decl.cls].size[2] / 2
-        if abs(other[2] - half - surface_z) < LEVEL_OVERLAP and np.linalg.norm(other[:2] - np.asarray(xy)[:2]) < radius:
+        if other[2] - half - surface_z < LEVEL_OVERLAP and np.linalg.norm(other[:2] - np.asarray(xy)[:2]) < radius:
             highest = max(highest, float(other[2] + half))
     return highest

@@ -8,6 +8,7 @@ whether it is empty, whether an object has fallen over). Constants the pick and 
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -138,8 +139,27 @@ class Arm:
                 self.controller.move_through([tucked], **FREE_MOTION)
             else:
                 self._rise_to_swing()
-                self.controller.move_through([self.raised(self.controller.target[3]), tucked])
+                raised = self.raised(self.controller.target[3])
+                via = self._swing_via(self.controller.target, raised)
+                self.controller.move_through([*via, raised, tucked])
         self.folded = True
+
+    def _swing_via(self, q_from: np.ndarray, q_to: np.ndarray) -> list[np.ndarray]:
+        """Where the joint-space swing q_from -> q_to (each shape (13,)) touches something: the first configuration
+        with one, then two of the torso and arm joints at q_to's values and the others at q_from's through which the
+        two swings are clear, as a one-element list; else (or where the straight swing is clear) none. A hand that
+        let a glass go on a counter, its wrist and upper arm turned far from the raised arm's, swept the knife block
+        beside the glass off the counter on the straight swing, however high it first rose."""
+        held = None if self.held is None else self.held_object(self.held)
+        if self.swing_clear(q_from, q_to, held):
+            return []
+        joints = range(3, self.controller.n_body)
+        for subset in [*((j,) for j in joints), *itertools.combinations(joints, 2)]:
+            via = q_from.copy()
+            via[list(subset)] = q_to[list(subset)]
+            if self.swing_clear(q_from, via, held) and self.swing_clear(via, q_to, held):
+                return [via]
+        return []
 
     def _rise_to_swing(self) -> None:
         """Where the joint-space swing into `raised` would touch something, first move the hand straight up, every

@@ -157,7 +157,9 @@ class PartMover:
         return self.arm.ik.solve(q, pos, quat, base_cost=ARC_BASE_COST, seeds=seeds)
 
     def _plan_grasp(self, motion: PartMotion, grasp: PartGrasp) -> tuple[np.ndarray, np.ndarray]:
-        """IK configurations at the grasp and APPROACH m before it, with a free base pose behind them."""
+        """IK configurations at the grasp and APPROACH m before it, with a free base pose behind them that the
+        robot can drive to from where it stands (an open dishwasher door parts the kitchen: the first free pose
+        by its edge lay on the far side of it, out of reach of a robot that had carried a glass to a counter)."""
         pos, quat = motion.grip_target(grasp, motion.value)
         rot = motion.pose_at(motion.value)[1] @ grasp.rotation
         before = pos - APPROACH * rot[:, 0]
@@ -171,6 +173,10 @@ class PartMover:
                 continue
             at = self._solve_at(pre.q, base, pos, quat, seeds=False)
             if at.converged and self.check.clear(at.q, motion.articulation, motion.value, riders=riders):
+                try:
+                    self.navigator.path_to(base)
+                except NavigationError:
+                    continue
                 return at.q, pre.q
         raise PhaseFailed(f"no free base pose from which the {grasp.kind} at {np.round(pos, 2).tolist()} is "
                           "reachable")

@@ -169,10 +169,17 @@ class Place:
 
     def _down_at(self, name: str, node: str, anchor: str, target: np.ndarray) -> SkillResult:
         """Carry `name` to stand at `anchor` (furniture: in front of it; a room: near `target` on the floor) and
-        lower it onto `target` (m) on `node`."""
+        lower it onto `target` (m) on `node`; in front of furniture along a checked way where one is found, as onto
+        a spot of the furniture (`place`): lowered unchecked from where the carry stopped, a vegetable for the
+        cutting board would have struck the knife block beside it, and the place gave up."""
         if anchor in self.navigator.furniture:
             failure, short = self._carry_to(name, anchor, target)
-            return failure if failure is not None else self._lower_onto(name, node, target, short)
+            if failure is not None:
+                return failure
+            outcome = None if short else self._lower_checked(name, node, target)
+            if outcome is None and not short:
+                outcome = self._lower_driven(name, node, target)
+            return outcome if outcome is not None else self._lower_onto(name, node, target, short)
         held_at = self.arm.held_offset(name)
         try:
             self.navigator.drive_to(self.navigator.stand_near(tuple(target[:2])), self.arm.carry(),

@@ -264,6 +264,20 @@ def test_what_stands_near_a_spot_on_a_top_is_what_a_carried_object_must_pass_ove
     assert tallest_beside(world, "disinfectant_wipes", pan + np.array([-0.8, 0.0, 0.0]), surface, 0.5) == surface
 
 
+def test_what_stands_beside_a_cutting_board_on_its_counter_counts_for_a_place_onto_the_board() -> None:
+    """`tallest_beside` onto an object: the knife block standing on the counter beside the cutting board rises
+    over the board's top and counts, though it does not stand on the board (a vegetable carried onto the board was
+    driven into it)."""
+    from planners.grasps.neighbours import tallest_beside
+
+    world = World(extras=[add_robot])
+    board, block = world.object_pose("cutting_board")[0], world.object_pose("knifeblock")[0]
+    top = board[2] + CATALOG["cutting_board"].size[2] / 2
+    block_top = block[2] + CATALOG["knifeblock"].size[2] / 2
+    assert np.linalg.norm(board[:2] - block[:2]) < 0.5 and block_top > top
+    assert abs(tallest_beside(world, "food_vegetable", board, top, 0.5) - block_top) < 1e-6
+
+
 def test_a_dress_is_dropped_into_the_laundry_basket_from_over_its_rim() -> None:
     """Cloth into a bin on the floor is let go just over the rim and drops in: lowered to the basket's floor, a
     dress hanging from its fold met the basket's walls 10 cm up and was backed out, and the arm reaching down (the
