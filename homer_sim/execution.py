@@ -177,8 +177,8 @@ class TaskRun:
                     self.workers.add(worker)
                     yield result
         finally:  # Ctrl-C, a failed task or an abandoned run: nothing keeps running for nobody
-            for ref in pending:
-                ray.cancel(ref, force=True)
+            for ref in pending:  # KeyboardInterrupt in the task; force=True (kill the worker) races a task that
+                ray.cancel(ref)  # is just finishing, and Ray 2.x then aborts the driver ("not pending")
 
     def _connect(self, ray: Any) -> None:
         if not ray.is_initialized():
