@@ -15,7 +15,7 @@ import numpy as np
 from homer_sim.errors import unknown_name
 from homer_sim.home.apartment import default_layout
 from homer_sim.home.build import build_spec
-from homer_sim.home.catalog import CATALOG
+from homer_sim.home.catalog import CATALOG, ObjectClass
 from homer_sim.home.furniture import furniture_geometry
 from homer_sim.home.layout import Layout, declared_graph
 from homer_sim.home.placement import start_poses
@@ -96,6 +96,10 @@ class World:
             return self._object_index[name]
         except KeyError:
             raise unknown_name("object", name, self.object_names) from None
+
+    def object_class(self, name: str) -> ObjectClass:
+        """The catalogue class of the object `name`."""
+        return CATALOG[self.layout.objects[self.object_index(name)].cls]
 
     def articulation(self, name: str) -> Articulation:
         """By `<furniture>/<part>`, or by furniture name when it has exactly one part."""

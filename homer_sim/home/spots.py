@@ -130,8 +130,8 @@ class Spots:
         the contacts pushed it through the bin's floor or knocked the bin over (which then crept on, 6-10 cm while
         the robot only stood by)."""
         z = self.landing_z(name, xy, from_z)
-        cls = CATALOG[self.layout.objects[self.world.object_index(name)].cls]
-        holder = CATALOG[self.layout.objects[self.world.object_index(target)].cls]
+        cls = self.world.object_class(name)
+        holder = self.world.object_class(target)
         opening = cavity(holder)
         if opening is None or cls.family in LIES_AS_IT_LANDS or math.hypot(*cls.size[:2]) / 2 <= opening.rim_radius:
             return z
@@ -185,7 +185,7 @@ class Spots:
         f = self.furniture[node]
         place = self._places[node][place_index]
         world_place = place_world(self.layout, f, place, opened=place.part is not None)
-        cls = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls]
+        cls = self.world.object_class(name)
         size = cls.size
         if size[2] > place.clearance - 0.005:
             return
@@ -233,7 +233,7 @@ class Spots:
     def floor_spot(self, name: str, room: str, near: tuple[float, float], rng: np.random.Generator,
                    exclude: set[int]) -> Spot:
         """A free spot on the floor of `room` near `near` (m), away from furniture and other objects."""
-        size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        size = self.world.object_class(name).size
         boxes = self.footprints(exclude)
         boxes = boxes[boxes[:, 4] < 0.05]
         rect = next(r.rect for r in self.layout.rooms if r.name == room)

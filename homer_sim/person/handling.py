@@ -18,7 +18,6 @@ import numpy as np
 
 from homer_sim.errors import PhysicsError
 from homer_sim.graph import INSIDE, ON, SceneGraph
-from homer_sim.home.catalog import CATALOG
 from homer_sim.home.placement import yaw_quat
 from homer_sim.home.spots import PlacementError, Spot, Spots, keep_out_rect
 from homer_sim.person.avatar import Avatar, AvatarError, compose, relative_pose
@@ -453,4 +452,4 @@ class Handling:
         self.avatar.held[hand] = name
 
     def _cls(self, name: str):
-        return CATALOG[self.world.layout.objects[self.world.object_index(name)].cls]
+        return self.world.object_class(name)

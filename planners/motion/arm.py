@@ -201,7 +201,7 @@ class Arm:
             posture = self.carry()
         reach, short = 0.0, False
         if self.held is not None:  # the held object sticks out past the base
-            size = CATALOG[self.world.layout.objects[self.world.object_index(self.held)].cls].size
+            size = self.world.object_class(self.held).size
             body = self.world.object_body_ids[self.world.object_index(self.held)]
             position = self.world.object_pose(self.held)[0]
             half_height = float(np.abs(self.world.data.xmat[body].reshape(3, 3)[2]) @ np.asarray(size) / 2)

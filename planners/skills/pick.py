@@ -14,7 +14,6 @@ from dataclasses import replace
 import numpy as np
 
 from homer_sim.graph import INSIDE, ON, RELATION_NAMES
-from homer_sim.home.catalog import CATALOG
 from homer_sim.home.placement import place_world, yaw_quat
 from homer_sim.home.spots import Spots
 from homer_sim.observe import SceneGraphObserver
@@ -86,7 +85,7 @@ class Pick:
             self.navigator.exempt = frozenset()
 
     def _pick(self, name: str, node: str | None, into: str | None) -> SkillResult:
-        cls = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls]
+        cls = self.world.object_class(name)
         reason = ungraspable_reason(cls)
         if reason is not None:
             return SkillResult(False, f"{name}: not graspable ({reason})")

@@ -129,7 +129,7 @@ class Place:
         here = self.controller.q()[:2]
         rect = next(r.rect for r in self.world.layout.rooms if r.name == room)
         near = here if self.world.layout.room_at(*here) == room else ((rect[0] + rect[2]) / 2, (rect[1] + rect[3]) / 2)
-        size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        size = self.world.object_class(name).size
         half = math.hypot(size[0], size[1]) / 2
         spot = None
         for _ in range(FLOOR_DRAWS):  # the first that leaves the floor passable (`Navigator.leaves_way`)
@@ -150,9 +150,9 @@ class Place:
         is there (its top, its floor or the pile in it); a thing with no up (cloth) into a bin is let go just over
         its rim and drops in. An object the catalogue does not count as a support (a cd player, a loaf) is tried
         too: whether the put-down object stays on it is for physics to say."""
-        cls = CATALOG[self.world.layout.objects[self.world.object_index(node)].cls]
+        cls = self.world.object_class(node)
         position = self.world.object_pose(node)[0]
-        held = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls]
+        held = self.world.object_class(name)
         size = held.size
         rim = position[2] + cls.size[2] / 2
         try:
@@ -193,7 +193,7 @@ class Place:
         `Arm.go_to`), held over what stands within PASS_NEAR of the spot: (a failure if it could not or the object
         fell out of the hand on the way; whether the robot stopped short with the object low)."""
         held_at = self.arm.held_offset(name)  # where the object hangs in the hand (grip frame)
-        size = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size
+        size = self.world.object_class(name).size
         surface = target[2] - size[2] / 2  # the held object passes over what stands near its spot, too
         try:
             short = self.arm.go_to(node, target[:2], surface_z=tallest_beside(self.world, name, target, surface,
@@ -231,7 +231,7 @@ class Place:
             if self.arm.solve(above, quat).converged:
                 break
         if short:
-            surface = target[2] - CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].size[2] / 2
+            surface = target[2] - self.world.object_class(name).size[2] / 2
             rise = tallest_beside(self.world, name, target, surface, PASS_NEAR) - surface + PASS_OVER
             if self.arm.grip_line(np.array([*grip.xpos[:2], max(grip.xpos[2], release[2] + rise)]), quat):
                 try:
@@ -482,7 +482,7 @@ class Place:
         if parent != node or (inside and relation != RELATION_NAMES[INSIDE]):
             return SkillResult(False, f"place: {name} ended {relation} {parent}, not {'inside' if inside else 'on'} "
                                       f"{node}")
-        family = CATALOG[self.world.layout.objects[self.world.object_index(name)].cls].family
+        family = self.world.object_class(name).family
         if family not in NO_UP_FAMILIES and self.arm.fallen_over(name):
             return SkillResult(False, f"place: {name} fell over on {node}")
         return SkillResult(True)
