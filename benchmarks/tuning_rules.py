@@ -37,7 +37,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks._common import emit  # noqa: E402
 from homer_sim.data.dataset import Dataset  # noqa: E402
-from model.evaluate import HEADLINE_WINDOW_MIN, FitSpec, cv_folds, household_split, rollout_queries  # noqa: E402
+from model.evaluate import HEADLINE_WINDOW_MIN, FitSpec, cv_folds, household_split, rollout_queries, uses_margin  # noqa: E402
 from model.methods import make_predictor  # noqa: E402
 from model.metrics import Counts, day_queries, gate, score, window_steps  # noqa: E402
 
@@ -74,6 +74,7 @@ def settings(dataset: Dataset, house: str, method: str, train_days: int | None, 
     val_queries = [day_queries([d], steps) for _, d in folds]
     test_queries = day_queries(test, steps)
     names = [k for k in scored.grid if k != "threshold"]
+    margin = uses_margin("paper")  # the decision rule `evaluate` scores the paper's objective with
     rows = []
     for values in itertools.product(*(scored.grid[k] for k in names)):
         for predictor in (*(p for p, _ in folds), scored):
@@ -81,9 +82,9 @@ def settings(dataset: Dataset, house: str, method: str, train_days: int | None, 
         val_rollouts = [rollout_queries(p, q, steps) for (p, _), q in zip(folds, val_queries, strict=True)]
         test_rollout = rollout_queries(scored, test_queries, steps)
         for threshold in scored.grid["threshold"]:
-            rows.append(([score(q, gate(r, q.observed, threshold), steps, scored.movable)
+            rows.append(([score(q, gate(r, q.observed, threshold, margin), steps, scored.movable)
                           for q, r in zip(val_queries, val_rollouts, strict=True)],
-                         score(test_queries, gate(test_rollout, test_queries.observed, threshold), steps,
+                         score(test_queries, gate(test_rollout, test_queries.observed, threshold, margin), steps,
                                scored.movable)))
     return rows
 

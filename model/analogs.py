@@ -172,7 +172,6 @@ class Analogs(Predictor):
         return out
 
 
-
 def _margin(probs: np.ndarray, observed: np.ndarray, other: np.ndarray, movable: np.ndarray) -> np.ndarray:
     """The best other parent's margin over every other destination, p_d - (1 - p_stay - p_d) clipped at 0, from
     probs (S, B, N, N), observed parents (B, N) and p_d (S, B, N): Shape (S, B, N), 0 for static nodes.
