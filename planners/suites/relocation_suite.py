@@ -30,6 +30,7 @@ import logging
 import sys
 import time
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -76,7 +77,8 @@ class Occurrence:
 
 @dataclass(frozen=True)
 class TripleResult:
-    """One relocation: success, its failure cause and reason, where the object ended, wall time (s)."""
+    """One relocation: success, its failure cause and reason, where the object ended, wall time (s), and the other
+    objects it moved more than MAX_DISPLACEMENT (name, m), counted whether or not a skill failed first."""
 
     occurrence: Occurrence
     cls: str
@@ -85,6 +87,7 @@ class TripleResult:
     reason: str
     ended_on: str
     wall_s: float
+    collateral: tuple[tuple[str, float], ...] = ()
 
 
 def occurrences(data: Path, households: list[str] | None = None, objects: list[str] | None = None
@@ -287,8 +290,9 @@ def run_triple(bench: Bench, occurrence: Occurrence, cls: str, rng: np.random.Ge
 
     started = time.perf_counter()
 
-    def result(cause: str, reason: str = "", ended: str = "") -> TripleResult:
-        return TripleResult(occurrence, cls, not cause, cause, reason, ended, time.perf_counter() - started)
+    def result(cause: str, reason: str = "", ended: str = "", found: Sequence[tuple[str, float]] = ()) -> TripleResult:
+        return TripleResult(occurrence, cls, not cause, cause, reason, ended, time.perf_counter() - started,
+                            tuple(found))
 
     try:
         problem = bench.live_until(occurrence)
@@ -306,15 +310,15 @@ def run_triple(bench: Bench, occurrence: Occurrence, cls: str, rng: np.random.Ge
     bench.world.settle(max_seconds=2.0)
     graph = robot.observer.update()
     ended = graph.parent_of(occurrence.obj) or ""
-    if failure is not None:
-        return result(cause_of(failure), failure, ended)
-    if ended != occurrence.destination:
-        return result("wrong place", f"{occurrence.obj} ended on {ended}", ended)
-    if CATALOG[cls].family not in NO_FALL_FAMILIES and robot.arm.fallen_over(occurrence.obj):
-        return result("fell over", f"{occurrence.obj} lies on its side on {ended}", ended)
     riders = {occurrence.obj} | {n for n in bench.world.object_names if _rides_on(graph, n, occurrence.obj)}
     found = displaced(bench.world, before, skip=riders)
-    return result("collateral", collateral_reason(found), ended) if found else result("", "", ended)
+    if failure is not None:
+        return result(cause_of(failure), failure, ended, found)
+    if ended != occurrence.destination:
+        return result("wrong place", f"{occurrence.obj} ended on {ended}", ended, found)
+    if CATALOG[cls].family not in NO_FALL_FAMILIES and robot.arm.fallen_over(occurrence.obj):
+        return result("fell over", f"{occurrence.obj} lies on its side on {ended}", ended, found)
+    return result("collateral", collateral_reason(found), ended, found) if found else result("", "", ended)
 
 
 def cause_of(failure: str) -> str:
@@ -390,9 +394,11 @@ def summarise(results: list[TripleResult], excluded: dict[str, str], wall_s: flo
         "excluded": dict(excluded), "n_excluded": len(excluded),
         "causes": dict(Counter(r.cause for r in results if not r.success).most_common()),
         "per_class": per_class, "worst_class_rate": worst,
+        "with_collateral": sum(bool(r.collateral) for r in results),  # failed or not: what else each one moved
         "meets_targets": bool(results) and overall >= TARGET_OVERALL and worst >= TARGET_CLASS,
         "results": [{**asdict(r.occurrence), "class": r.cls, "success": r.success, "cause": r.cause,
-                     "reason": r.reason, "ended_on": r.ended_on, "wall_s": round(r.wall_s, 2)} for r in results],
+                     "reason": r.reason, "ended_on": r.ended_on, "wall_s": round(r.wall_s, 2),
+                     "collateral": {name: round(d, 3) for name, d in r.collateral}} for r in results],
         "wall_s": wall_s, **extra,
     }
 
@@ -400,10 +406,11 @@ def summarise(results: list[TripleResult], excluded: dict[str, str], wall_s: flo
 def format_relocations(result: dict) -> str:
     """The relocation suite result as plain text: failures, excluded triples, causes, per class, overall."""
     lines = [f"FAILED {r['obj']}: {r['source']} -> {r['destination']}: {r['reason']}"
+             + (f" (also moved {', '.join(r['collateral'])})" if r["collateral"] and r["cause"] != "collateral" else "")
              for r in result["results"] if not r["success"]]
     lines += [f"excluded {triple}: {why}" for triple, why in result["excluded"].items()]
     lines += [f"cause {cause:<14} {count}" for cause, count in result["causes"].items()]
     lines += [f"{cls:<20} {e['successes']:>3}/{e['tried']:<3}" for cls, e in result["per_class"].items()]
     lines.append(f"overall {result['overall']:.1%} of {result['tried']} triples tried; {result['n_excluded']} "
-                 f"of {result['triples']} excluded")
+                 f"of {result['triples']} excluded; {result['with_collateral']} moved something else, failed or not")
     return "\n".join(lines)

@@ -144,6 +144,9 @@ def test_quick_relocations_add_up_and_keep_their_outcomes(one_day: Path) -> None
     assert result["tried"] == len(result["results"]) == len(QUICK_OUTCOMES)
     assert result["successes"] + sum(result["causes"].values()) == result["tried"]
     assert sum(e["tried"] for e in result["per_class"].values()) == result["tried"]
+    # what else a relocation moved is listed whether or not a skill failed first; a success moved nothing else
+    assert result["with_collateral"] == sum(bool(r["collateral"]) for r in result["results"])
+    assert not any(r["success"] and r["collateral"] for r in result["results"])
     outcomes = {f"{r['obj']}: {r['source']} -> {r['destination']}": r["cause"] for r in result["results"]}
     assert outcomes == QUICK_OUTCOMES, [r["reason"] for r in result["results"] if not r["success"]]
 
