@@ -11,7 +11,7 @@ from dataclasses import replace
 import numpy as np
 
 from homer_sim.home.catalog import ObjectClass
-from homer_sim.home.shapes import cavity
+from homer_sim.home.shapes import cavity, handle_boxes
 from planners.grasps.candidate import (
     GRIPPER_OPEN,
     MAX_WIDTH,
@@ -49,7 +49,7 @@ def top_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, robot_x
     grip_z = max(top - 0.02, support + PAD_HALF + SUPPORT_CLEARANCE)
     hollow = cavity(cls)
     if hollow is not None and min(sx, sy) > MAX_WIDTH - 0.02:
-        return rim_grasps(hollow, position, yaw, support, robot_xy)
+        return rim_grasps(hollow, position, yaw, support, robot_xy, handle_boxes(cls))
     grasps = []
     narrow = yaw + (math.pi / 2 if sy < sx else 0.0)  # fingers close along the narrow side
     width = min(sx, sy)

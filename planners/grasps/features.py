@@ -40,6 +40,12 @@ POT_HANDLE_GAP = 0.003  # m between the pads' inner ends and the pot's wall
 POT_HANDLE_MARGIN = 0.015  # m per finger between an open pad and the handle plate
 POT_HANDLE_PITCHES = (math.radians(30.0), math.radians(45.0), math.radians(60.0))  # rad below the horizontal
 HANG_RISE = 0.15  # m a hung object's centre is to end above where it stood (its drop as it swings added)
+RIM_TURNS = tuple(math.radians(a) for a in (0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0))  # rad off the rim point
+# nearest the robot of the rim pinches tried, the first RIM_POINTS clear of a side handle
+RIM_POINTS = 3
+RIM_OPENING = 0.03  # m per finger a rim pinch opens
+FINGER_HALF_TRAVEL = 0.005  # m: half a finger link's extent along the finger travel
+HANDLE_MARGIN = 0.005  # m a rim pinch's fingers keep clear of a pot's side handle
 
 
 def handle_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray,
@@ -77,10 +83,38 @@ def handle_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray,
     return grasps
 
 
-def tilted_rims(hollow, position: np.ndarray, yaw: float, support: float, out: np.ndarray) -> list[Grasp]:
+def _at_a_handle(hollow, handles, radial: np.ndarray) -> bool:
+    """Whether the fingers of a rim pinch at the rim point in body-frame horizontal direction `radial` (unit,
+    shape (2,)), closing along it, come within HANDLE_MARGIN of one of `handles` (body-frame (centre, half
+    extents) boxes, `homer_sim.home.shapes.handle_boxes`) seen from above: a pot's side handles lie just under
+    its rim, where the pads go down beside the wall, and the outer finger lands on the handle plate."""
+    point = np.asarray(hollow.center_xy) + radial * (hollow.rim_radius + 0.004)
+    tangent = np.array([-radial[1], radial[0]])
+    reach = RIM_OPENING + FINGER_HALF_TRAVEL  # from the rim point to either finger's far face
+    for centre, half in handles:
+        apart = np.asarray(centre[:2]) - point
+        # separating axes of two rectangles: the fingers' footprint (radial, tangent) and the handle's (x, y)
+        if abs(apart @ radial) > reach + abs(half[0] * radial[0]) + abs(half[1] * radial[1]) + HANDLE_MARGIN:
+            continue
+        if abs(apart @ tangent) > FINGER_HALF_THICKNESS + abs(half[0] * tangent[0]) + abs(half[1] * tangent[1]) \
+                + HANDLE_MARGIN:
+            continue
+        if abs(apart[0]) > half[0] + reach * abs(radial[0]) + FINGER_HALF_THICKNESS * abs(tangent[0]) + HANDLE_MARGIN:
+            continue
+        if abs(apart[1]) > half[1] + reach * abs(radial[1]) + FINGER_HALF_THICKNESS * abs(tangent[1]) + HANDLE_MARGIN:
+            continue
+        return True
+    return False
+
+
+def tilted_rims(hollow, position: np.ndarray, yaw: float, support: float, out: np.ndarray,
+                handles=()) -> list[Grasp]:
     """Pinches of a wide container's front rim from the compartment's front, pitched down SHELF_PITCHES (not
-    horizontal), the fingers closing across the wall along the outward direction."""
+    horizontal), the fingers closing across the wall along the outward direction; none where a side handle
+    (`handles`, body-frame boxes) lies at the front rim (see `_at_a_handle`)."""
     c, s = math.cos(yaw), math.sin(yaw)
+    if _at_a_handle(hollow, handles, np.array([c * out[0] + s * out[1], -s * out[0] + c * out[1]])):
+        return []
     centre = position[:2] + np.array([c * hollow.center_xy[0] - s * hollow.center_xy[1],
                                       s * hollow.center_xy[0] + c * hollow.center_xy[1]])
     rim_z = position[2] + hollow.rim_z
@@ -91,14 +125,17 @@ def tilted_rims(hollow, position: np.ndarray, yaw: float, support: float, out: n
         y = np.cross(across, x)  # in the vertical plane of the approach, pointing out of the compartment
         xy = centre + out[:2] * (hollow.rim_radius + 0.004)
         z = max(rim_z - 0.015, support + PAD_HALF + SUPPORT_CLEARANCE)
-        grasps.append(Grasp(np.array([xy[0], xy[1], z]), np.column_stack([x, y, np.cross(x, y)]), 0.03,
+        grasps.append(Grasp(np.array([xy[0], xy[1], z]), np.column_stack([x, y, np.cross(x, y)]), RIM_OPENING,
                             GraspKind(Family.RIM, pitch=round(math.degrees(pitch))), SHELF_APPROACH))
     return grasps
 
 
-def rim_grasps(hollow, position: np.ndarray, yaw: float, support: float, robot_xy: np.ndarray) -> list[Grasp]:
+def rim_grasps(hollow, position: np.ndarray, yaw: float, support: float, robot_xy: np.ndarray,
+               handles=()) -> list[Grasp]:
     """Pinches of a container's wall at the rim, the fingers closing radially: the rim point nearest the robot
-    at `robot_xy` first, then 30 degrees either side. A straight wall (a bin) is pinched RIM_DEEP at the rim
+    at `robot_xy` first, then 30 degrees either side; a point where the fingers would meet a side handle
+    (`handles`, body-frame boxes, see `_at_a_handle`) is skipped for the next of RIM_TURNS, 60 then 90 degrees
+    aside, up to RIM_POINTS pinches. A straight wall (a bin) is pinched RIM_DEEP at the rim
     point farthest from the robot instead: held at one point of its rim, the container's weight tilts it about
     the tangent there (a 44 cm bin some 20 degrees, its far side on the floor after a 15 cm lift) and keeps it
     creeping round in the pads while its centre of mass is off to the side (4-5 mm in 3 s); so the hand rises
@@ -118,12 +155,15 @@ def rim_grasps(hollow, position: np.ndarray, yaw: float, support: float, robot_x
         lift = max(rim_lift(hollow, rim_z - support, rim_z - z),
                    hang_lift(np.array([hollow.rim_radius + 0.004, 0.0, z - position[2]])))
     grasps = []
-    for delta in (0.0, math.radians(30), -math.radians(30)):
+    for delta in RIM_TURNS:
         angle = toward + delta + (math.pi if straight else 0.0)
+        if len(grasps) == RIM_POINTS or _at_a_handle(hollow, handles, np.array([math.cos(angle - yaw),
+                                                                                math.sin(angle - yaw)])):
+            continue
         radial = np.array([math.cos(angle), math.sin(angle)])
         xy = centre + radial * (hollow.rim_radius + 0.004)
-        grasps.append(Grasp(np.array([xy[0], xy[1], z]), top_rotation(angle), 0.03, GraspKind(Family.RIM), lift=lift,
-                            hang=straight))
+        grasps.append(Grasp(np.array([xy[0], xy[1], z]), top_rotation(angle), RIM_OPENING, GraspKind(Family.RIM),
+                            lift=lift, hang=straight))
     return grasps
 
 

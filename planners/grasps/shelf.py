@@ -15,7 +15,7 @@ from dataclasses import replace
 import numpy as np
 
 from homer_sim.home.catalog import ObjectClass
-from homer_sim.home.shapes import cavity
+from homer_sim.home.shapes import cavity, handle_boxes
 from planners.grasps.candidate import (
     FINGER_HALF_THICKNESS,
     GRIPPER_OPEN,
@@ -118,7 +118,7 @@ def shelf_grasps(cls: ObjectClass, position: np.ndarray, quat: np.ndarray, outwa
     out, _, yaw = shelf_frame(outward, quat)
     support, top = position[2] - sz / 2, position[2] + sz / 2
     hollow = cavity(cls)
-    rims = [] if hollow is None else tilted_rims(hollow, position, yaw, support, out)
+    rims = [] if hollow is None else tilted_rims(hollow, position, yaw, support, out, handle_boxes(cls))
     level = side_grasps(cls, position, quat, outward, front) or side_grasps(cls, position, quat, outward, -np.inf)
     face = _face_normal(out, yaw, cls)
     turn_cos = float(face @ out)

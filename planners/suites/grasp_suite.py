@@ -1,7 +1,9 @@
 """`homer grasp-suite`: the grasp regression suite, and `register(subparsers)` for the `homer` parser.
 
 Every robot-graspable object class in the apartment is picked several times by `planners.skills.Robot`, each
-time from a randomised start pose on its home surface or shelf (position jitter, yaw). The scene is set up by
+time from a randomised start pose on its home surface or shelf (position jitter, yaw) that keeps the gaps the
+layout keeps to its neighbours and to furniture walls: this narrows the test to the start layout's spacing (no
+object starts against a wall or touching another; see `_jitter_pose`). The scene is set up by
 the suite, not the robot: the apartment's settled start state, the doors or drawer holding the object opened,
 the object moved to its trial pose, the robot tucked in front of the furniture. From there on only physics
 moves anything. A trial succeeds when the object is at least MIN_LIFT m above its start, stays there for
@@ -31,6 +33,7 @@ from homer_sim.execution import IN_PROCESS, Backend
 from homer_sim.graph import INSIDE
 from homer_sim.home.apartment import default_layout
 from homer_sim.home.catalog import CATALOG, FAMILIES
+from homer_sim.home.placement import SPOT_GAP
 from planners.suites.collateral import collateral_reason, displaced
 
 if TYPE_CHECKING:
@@ -48,7 +51,7 @@ YAW_ON = math.pi  # rad: yaw jitter on open surfaces (top grasps take any yaw)
 YAW_INSIDE = math.radians(20.0)  # rad: yaw jitter on shelves and in drawers (objects face the front)
 OPEN_SETUP = 0.96  # openness the suite gives the door or drawer in front of the object
 MAX_PENETRATION = 0.002  # m: a sampled start pose may not press deeper into anything
-POSE_TRIES = 30
+POSE_TRIES = 200  # a pose keeping the layout's gaps is rare for an object packed close (see `_jitter_pose`)
 TARGET_OVERALL = 0.95
 TARGET_CLASS = 0.8
 DEFAULT_TRIALS = 3
@@ -138,20 +141,78 @@ def _penetration(world: World, body: int) -> float:
     return deepest
 
 
+class _Gaps:
+    """The gaps (m) between the geoms of one object's body and the collision geoms round it (its neighbours', the
+    furniture's panels and boards, the floor; never the robot's, told by `robot_geom_ids`), each read up to
+    SPOT_GAP: farther is SPOT_GAP. Built at the object's home pose, it keeps the geoms its jittered poses can
+    come within SPOT_GAP of (the object swept over JITTER in x and y and any yaw) and their gaps there."""
+
+    def __init__(self, world: World, body: int) -> None:
+        from planners.motion.control import robot_geom_ids
+
+        model, data = world.model, world.data
+        self.world = world
+        self.mine = np.flatnonzero(model.geom_bodyid == body)
+        others = np.ones(model.ngeom, dtype=bool)
+        others[self.mine] = False
+        others[robot_geom_ids(model)] = False
+        contype, conaffinity = model.geom_contype, model.geom_conaffinity
+        for g in self.mine:  # only geoms that collide with one of the object's
+            others &= ((contype & conaffinity[g]) | (contype[g] & conaffinity)) != 0
+        centre = data.xpos[body]
+        radius = max(float(np.linalg.norm(data.geom_xpos[g] - centre) + model.geom_rbound[g]) for g in self.mine)
+        reach = radius + math.sqrt(2.0) * JITTER + SPOT_GAP  # the object's farthest reach from its home centre
+        near = (np.linalg.norm(data.geom_xpos - centre, axis=1) < reach + model.geom_rbound) \
+            | (model.geom_rbound == 0.0)  # a plane has no bound
+        self.others = np.flatnonzero(others & near)
+        self.home = self.now()
+
+    def now(self) -> np.ndarray:
+        """The gap (m, at most SPOT_GAP; negative where they overlap) to each of `self.others` at the current
+        geom poses, shape (len(self.others),)."""
+        import mujoco
+
+        model, data = self.world.model, self.world.data
+        gaps = np.full(len(self.others), SPOT_GAP)
+        bound = model.geom_rbound
+        for k, other in enumerate(self.others):
+            for g in self.mine:
+                apart = np.linalg.norm(data.geom_xpos[g] - data.geom_xpos[other])
+                if bound[other] > 0.0 and apart > bound[g] + bound[other] + SPOT_GAP:  # bounding spheres apart
+                    continue
+                gaps[k] = min(gaps[k], mujoco.mj_geomDistance(model, data, int(g), int(other), SPOT_GAP, None))
+        return gaps
+
+    def kept(self) -> bool:
+        """Whether the current pose keeps the gap the layout keeps to every geom round the object: SPOT_GAP, or the
+        home pose's own gap where that is smaller (the board it stands on, a neighbour packed closer), less
+        MAX_PENETRATION."""
+        return bool(np.all(self.now() >= np.minimum(SPOT_GAP, self.home) - MAX_PENETRATION))
+
+
 def _jitter_pose(world: World, name: str, rng: np.random.Generator) -> None:
     """Move object `name` to a random pose near where it rests: xy within JITTER, yaw within YAW_ON (open
-    surfaces) or YAW_INSIDE (shelves, drawers); a pose that presses into a neighbour or a wall is resampled,
-    and after POSE_TRIES the object stays at its home pose."""
+    surfaces) or YAW_INSIDE (shelves, drawers). A pose that presses into anything, or that comes closer to a
+    neighbour or to a furniture wall (a side panel, a shelf's back) than the layout keeps it (see `_Gaps`), is
+    resampled; after POSE_TRIES the object stays at its home pose. So the suite tests picks from the spacing the
+    layout keeps, not harder ones: no object starts against a wall or touching another, where the layout puts
+    none (and where no finger fits)."""
+    import mujoco
+
     decl = world.layout.objects[world.object_index(name)]
     yaw_range = YAW_INSIDE if decl.relation == INSIDE else YAW_ON
     home_pos, home_quat = world.object_pose(name)
     body = int(world.object_body_ids[world.object_index(name)])
+    gaps = _Gaps(world, body)
     for _ in range(POSE_TRIES):
         dx, dy = rng.uniform(-JITTER, JITTER, size=2)
         yaw = float(rng.uniform(-yaw_range, yaw_range))
         turn = np.array([math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)])
-        world.set_object_pose(name, home_pos + np.array([dx, dy, 0.0]), _quat_mul(turn, home_quat))
-        if _penetration(world, body) < MAX_PENETRATION:
+        world.set_object_pose(name, home_pos + np.array([dx, dy, 0.0]), _quat_mul(turn, home_quat), forward=False)
+        mujoco.mj_kinematics(world.model, world.data)
+        mujoco.mj_collision(world.model, world.data)
+        if _penetration(world, body) < MAX_PENETRATION and gaps.kept():
+            mujoco.mj_forward(world.model, world.data)
             return
     world.set_object_pose(name, home_pos, home_quat)
 

@@ -28,7 +28,9 @@ def add_commands(subparsers: argparse._SubParsersAction) -> None:
     suite = subparsers.add_parser(
         "grasp-suite", help="pick every graspable object class from randomised start poses",
         description=f"Pick each robot-graspable object class of the apartment from randomised start poses on "
-        f"its home surface or shelf; success: lifted {MIN_LIFT * 100:.0f} cm and held {HOLD_SECONDS:.0f} s with "
+        f"its home surface or shelf, each keeping the gaps the layout keeps to its neighbours and to furniture walls "
+        f"(a narrower test than any pose: no object starts against a wall or touching another); success: lifted "
+        f"{MIN_LIFT * 100:.0f} cm and held {HOLD_SECONDS:.0f} s with "
         f"slip under {MAX_SLIP * 1000:.0f} mm. Exit status 1 when the overall rate is below {TARGET_OVERALL} or a "
         f"class is below {TARGET_CLASS}. With --relocations: every (object, from, to) move of a dataset's training "
         "days, tried from the day's state before the move: opened, picked, carried, placed, closed; success: the "

@@ -4,20 +4,27 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import mujoco
 import numpy as np
 import pytest
 
 from homer_sim.errors import HomerError
 from homer_sim.home.apartment import default_layout
 from homer_sim.home.catalog import CATALOG
+from homer_sim.home.placement import SPOT_GAP
 from homer_sim.recording import read_recording
+from homer_sim.world import World
 from planners.grasps.candidate import ungraspable_reason
+from planners.motion.control import robot_geom_ids
+from planners.robot import add_robot
 from planners.suites.grasp_suite import (
+    MAX_PENETRATION,
     MAX_SLIP,
     MIN_LIFT,
     TARGET_CLASS,
     TARGET_OVERALL,
     TrialResult,
+    _jitter_pose,
     chosen_classes,
     quick_subset,
     run_suite,
@@ -80,6 +87,48 @@ def test_quick_subset_lifts_and_holds(tmp_path: Path) -> None:
     assert {e.split(" trial ")[0] for e in events if " trial " in e} == set(result["per_class"]), events
     times = entities["world/bodies/robot\\/base"].column("physics_s").drop_null().to_pylist()
     assert times == sorted(times) and len(times) > 10 * result["trials"]
+
+
+class _Draws:
+    """A stand-in for the suite's random generator: `uniform` hands out the given draws in turn."""
+
+    def __init__(self, *draws) -> None:
+        self.draws = list(draws)
+
+    def uniform(self, low, high, size=None):
+        return self.draws.pop(0)
+
+
+def _nearest_beside(world: World, name: str) -> tuple[float, np.ndarray]:
+    """The gap (m) from object `name` to the nearest collision geom beside it (not under it, not the robot's)
+    within 6 cm, and the unit horizontal direction towards it."""
+    model, data = world.model, world.data
+    body = int(world.object_body_ids[world.object_index(name)])
+    robot = set(robot_geom_ids(model).tolist())
+    best, towards, fromto = np.inf, np.zeros(2), np.zeros(6)
+    for other in range(model.ngeom):
+        if model.geom_bodyid[other] == body or other in robot or not model.geom_contype[other]:
+            continue
+        for g in np.flatnonzero(model.geom_bodyid == body):
+            gap = mujoco.mj_geomDistance(model, data, int(g), other, 0.06, fromto)
+            step = fromto[3:5] - fromto[:2]
+            if gap < best and np.linalg.norm(step) > 0.9 * gap > 0.005:  # beside it: the way there is level
+                best, towards = gap, step / np.linalg.norm(step)
+    return float(best), towards
+
+
+@pytest.mark.parametrize("name", ["cd", "charger"])  # in a drawer: beside the charger; before the drawer's front
+def test_a_jittered_start_keeps_the_gap_the_layout_keeps_to_neighbours_and_walls(name: str) -> None:
+    """A start pose 3 mm from a neighbour or a wall presses into nothing, but leaves no finger room where the
+    layout keeps SPOT_GAP: it is drawn again (here: no jitter), not taken."""
+    world = World(extras=[add_robot])
+    gap, towards = _nearest_beside(world, name)
+    assert SPOT_GAP - 1e-3 <= gap < 0.06
+    home, quat = world.object_pose(name)
+    _jitter_pose(world, name, _Draws((gap - 0.003) * towards, 0.0, np.zeros(2), 0.0))
+    pos, _ = world.object_pose(name)
+    assert np.allclose(pos, home, atol=1e-6), pos - home  # the second draw: the home pose
+    assert _nearest_beside(world, name)[0] >= SPOT_GAP - MAX_PENETRATION
 
 
 def test_the_way_down_into_a_side_grasp_keeps_to_its_line() -> None:

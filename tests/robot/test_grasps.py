@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from homer_sim.home.catalog import CATALOG
+from homer_sim.home.shapes import handle_boxes
 from planners.grasps.above import (
     RAISED_HOLD,
     lying_as,
@@ -264,6 +265,51 @@ def test_a_bin_is_pinched_deep_at_its_far_rim_lifted_clear_and_hung() -> None:
     assert first.lift - (np.linalg.norm(offset) - offset[2]) >= HANG_RISE - 1e-9
     bowl = top_grasps(CATALOG["bowl"], np.array([0.0, 0.0, 0.035]), _yawed(0.0), np.array([-1.0, 0.0]))[0]
     assert bowl.label == "rim" and not bowl.hang and bowl.lift == 0.0 and bowl.position[0] < 0  # flared: near rim
+
+
+def _fingers_on_a_handle(cls, position: np.ndarray, yaw_deg: float, grasp) -> bool:
+    """Whether the footprint of a rim pinch's fingers from above (both fingers, opened, each FINGER_HALF_THICKNESS
+    either side of the travel) reaches onto one of a pot's side handles, sampled."""
+    from homer_sim.home.shapes import handle_boxes
+    from planners.grasps.features import FINGER_HALF_TRAVEL
+
+    yaw = math.radians(yaw_deg)
+    turn = np.array([[math.cos(yaw), math.sin(yaw)], [-math.sin(yaw), math.cos(yaw)]])  # world to body
+    travel, across = turn @ grasp.rotation[:2, 1], turn @ grasp.rotation[:2, 2]
+    point = turn @ (grasp.position[:2] - position[:2])
+    reach = grasp.pre_opening + FINGER_HALF_TRAVEL
+    for a in np.linspace(-reach, reach, 41):
+        for b in np.linspace(-FINGER_HALF_THICKNESS, FINGER_HALF_THICKNESS, 9):
+            p = point + a * travel + b * across
+            if any(abs(p[0] - c[0]) <= h[0] and abs(p[1] - c[1]) <= h[1] for c, h in handle_boxes(cls)):
+                return True
+    return False
+
+
+@pytest.mark.parametrize("name", ["cookingpot", "sauce_pan"])
+def test_rim_pinches_of_a_pot_skip_the_rim_at_its_side_handles(name: str) -> None:
+    """With a side handle pointing at or away from the robot, the rim point the pinches start from (a pot's straight
+    wall: the far one) lies at a handle: the outer finger comes down on the handle plate. Such points are skipped
+    for points farther round the rim, still three."""
+    cls = CATALOG[name]
+    position = np.array([0.0, 0.0, cls.size[2] / 2])
+    for yaw in (0.0, 15.0, 180.0, 200.0):  # a handle at or near the robot (on +x)
+        grasps = top_grasps(cls, position, _yawed(yaw), np.array([1.0, 0.0]))
+        assert [g.label for g in grasps] == ["rim"] * 3, yaw
+        assert not any(_fingers_on_a_handle(cls, position, yaw, g) for g in grasps), yaw
+    clear = top_grasps(cls, position, _yawed(90.0), np.array([1.0, 0.0]))  # the handles to either side
+    assert clear[0].position[0] < 0 and abs(clear[0].position[1]) < 1e-9  # straight walls: the far rim first, as before
+
+
+def test_a_pot_on_a_shelf_gets_no_front_rim_pinch_at_a_handle() -> None:
+    from homer_sim.home.shapes import cavity
+    from planners.grasps.features import tilted_rims
+
+    cls = CATALOG["cookingpot"]
+    position, out = np.array([0.0, 0.0, cls.size[2] / 2]), np.array([1.0, 0.0, 0.0])
+    assert tilted_rims(cavity(cls), position, 0.0, 0.0, out, ()) != []
+    assert tilted_rims(cavity(cls), position, 0.0, 0.0, out, handle_boxes(cls)) == []  # the +x handle at the front
+    assert tilted_rims(cavity(cls), position, math.pi / 2, 0.0, out, handle_boxes(cls)) != []  # handles aside
 
 
 def test_hanging_turns_the_hand_until_the_load_is_straight_below() -> None:
