@@ -270,7 +270,6 @@ def test_a_bin_is_pinched_deep_at_its_far_rim_lifted_clear_and_hung() -> None:
 def _fingers_on_a_handle(cls, position: np.ndarray, yaw_deg: float, grasp) -> bool:
     """Whether the footprint of a rim pinch's fingers from above (both fingers, opened, each FINGER_HALF_THICKNESS
     either side of the travel) reaches onto one of a pot's side handles, sampled."""
-    from homer_sim.home.shapes import handle_boxes
     from planners.grasps.features import FINGER_HALF_TRAVEL
 
     yaw = math.radians(yaw_deg)
