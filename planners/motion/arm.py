@@ -118,13 +118,21 @@ class Arm:
     def reach(self, q_goal: np.ndarray, grip: float | None = None) -> None:
         """Move to configuration q_goal (shape (13,)); from the tuck posture straight there if that swing, the
         fingers opening to `grip` (m per finger) on the way, touches nothing, else through `raised`, quicker (the
-        hand is empty)."""
+        hand is empty). From `raised` the fingers open on the way only if that leg is clear with them open, else
+        once the arm is there: the open pads of a hand coming down from the raised arm swept a keyboard 77 cm
+        across a desk."""
         if self.folded:
             opened = q_goal.copy()
             if grip is not None:
                 opened[self.controller.n_body:] = grip
-            via = [] if self.swing_clear(self.controller.target, opened) else [self.raised(q_goal[3])]
-            self.controller.move_through([*via, q_goal], grip=grip, **FREE_MOTION)
+            if self.swing_clear(self.controller.target, opened):
+                self.controller.move_through([q_goal], grip=grip, **FREE_MOTION)
+            else:
+                raised = self.raised(q_goal[3])
+                early = grip is None or self.swing_clear(raised, opened)
+                self.controller.move_through([raised, q_goal], grip=grip if early else None, **FREE_MOTION)
+                if not early:
+                    self.controller.set_grip(grip)
         else:
             self.controller.move_through([q_goal], grip=grip)
         self.folded = False
