@@ -39,8 +39,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"homer: error: {error}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:  # every file is written atomically: what is there is complete
-        print("homer: interrupted; files written so far are complete (generate resumes where it stopped)",
-              file=sys.stderr)
+        print("homer: interrupted; files written so far are complete (generate, replay and assist-eval, run again, "
+              "go on where they stopped)", file=sys.stderr)
         return 130
 
 
