@@ -253,7 +253,7 @@ class Pick:
                          out: np.ndarray | None = None, replan: bool = True) -> SkillResult:
         """Pick `name` from a shelf inside cabinet `node`: each grasp of `shelf_grasps` in turn, from a base
         pose where the arm clears the compartment; the object lifted SIDE_LIFT m (over what stands in front of it,
-        `rise_to_pass`), drawn out, then raised.
+        `rise_to_pass`, and over a basin's rim, `_rim_rise`), drawn out, then raised.
         With `out` (a horizontal unit vector, shape (2,)), from an open top instead, for a shelf next: the grasps a
         shelf takes (side grasps, the fingers as deep on the object as they reach, then pitched ones), approached
         against `out`. With `replan`, once a failed grasp has moved the object (see `disturbed`), the grasps are
