@@ -250,10 +250,10 @@ class Arm:
         (see `rolled_grasps`), also into the furniture (against `pull`): beside it often no base pose is free.
         With `here_first`, where the robot stands is tried first; with `direct`, the arm may also swing straight
         from the tuck (see `way_in`). `rise`: m the object must rise before it is drawn out (over what stands in
-        front of it, `rise_to_pass`): where it is more than SIDE_LIFT, that lift is tried first, the object (`held`,
-        as the grasp would hold it) checked clear of the compartment at its top, from every base pose; the others
-        where none reaches it (the neighbour's outline is a box round it: a trash bag drawn out low passed the can
-        beside it)."""
+        front of it, `rise_to_pass`, or a basin's rim): where it is more than SIDE_LIFT, that lift is tried first,
+        the object (`held`, as the grasp would hold it) checked clear of the compartment at its top, from every base
+        pose; the others where none reaches it (the neighbour's outline is a box round it: a trash bag drawn out
+        low passed the can beside it)."""
         quat = grasp.quat()
         above = grasp.position - grasp.approach * grasp.rotation[:, 0]
         obstacles = self.navigator.obstacles()

@@ -28,7 +28,7 @@ from planners.grasps.above import (
 from planners.grasps.candidate import Grasp, disturbed, ungraspable_reason
 from planners.grasps.features import hang_rotation
 from planners.grasps.geometry import matrix_to_quat
-from planners.grasps.neighbours import neighbour_footprints, rise_to_pass
+from planners.grasps.neighbours import PASS_ABOVE, neighbour_footprints, rise_to_pass
 from planners.grasps.ranking import rank_from_above
 from planners.grasps.shelf import shelf_grasps
 from planners.motion.arm import (
@@ -42,7 +42,7 @@ from planners.motion.arm import (
 from planners.motion.clearance import Held
 from planners.motion.control import FREE_MOTION
 from planners.motion.navigation import NavigationError
-from planners.skills.parts import behind_a_door, covered_places, drawer_rim, shelves_inside
+from planners.skills.parts import behind_a_door, covered_places, drawer_rim, rim_above, shelves_inside
 from planners.skills.result import SkillResult
 
 LIFT = 0.15  # m
@@ -253,15 +253,18 @@ class Pick:
                          out: np.ndarray | None = None, replan: bool = True) -> SkillResult:
         """Pick `name` from a shelf inside cabinet `node`: each grasp of `shelf_grasps` in turn, from a base
         pose where the arm clears the compartment; the object lifted SIDE_LIFT m (over what stands in front of it,
-        `rise_to_pass`), drawn out, then raised.
+        `rise_to_pass`, and over a basin's rim, `_rim_rise`), drawn out, then raised.
         With `out` (a horizontal unit vector, shape (2,)), from an open top instead, for a shelf next: the grasps a
         shelf takes (side grasps, the fingers as deep on the object as they reach, then pitched ones), approached
         against `out`. With `replan`, once a failed grasp has moved the object (see `disturbed`), the grasps are
         planned again for where it now stands (the others were for where it stood)."""
         grasps, out, front = self._shelf_candidates(name, node, cls, position, quat, out)
         # over what stands in front of it on its shelf, or, on an open top, within the SIDE_PULL it is drawn out (a
-        # cereal box drawn out low across the dining table took the bowl in front of it along, 80 cm)
-        rise = rise_to_pass(self.world, name, position, out, front if np.isfinite(front) else SIDE_PULL)
+        # cereal box drawn out low across the dining table took the bowl in front of it along, 80 cm); and over
+        # the furniture's own rim in front of its place (a canister of wipes drawn out of the bathroom sink's basin
+        # 3 cm up struck the basin's front wall and fell over in the hand)
+        rise = max(rise_to_pass(self.world, name, position, out, front if np.isfinite(front) else SIDE_PULL),
+                   self._rim_rise(node, position, cls.size[2]))
         if not grasps:
             return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
         unreachable, failures = [], []
@@ -431,14 +434,31 @@ class Pick:
         under another of its places, `covered_places`: a bookshelf's lower levels, where only a grasp from the front
         fits; whether it has less than OPEN_ABOVE m of free height, though nothing of `node` is over it: a shower's
         corner shelf, a sink's basin, where one from the front may fit better than one from above)."""
+        support = self._support(node, position, height)
+        if support is None:
+            return False, False
+        _, relation, k, place = support
+        return k in covered_places(self.spots, node, relation), place.clearance < OPEN_ABOVE
+
+    def _support(self, node: str, position: np.ndarray, height: float) -> tuple | None:
+        """(z m, relation, index, Place) of the fixed place of furniture `node` an object of `height` m at
+        `position` stands on (the highest one at most 2 cm above its bottom), or None (none; not furniture)."""
         furniture = self.spots.furniture.get(node)
         if furniture is None:
-            return False, False
+            return None
         bottom = position[2] - height / 2
         below = [(place_world(self.world.layout, furniture, p)["z"], relation, k, p) for relation in (ON, INSIDE)
                  for k, p in self.spots.places_of(node, relation) if p.part is None]
         below = [(z, relation, k, p) for z, relation, k, p in below if z <= bottom + 0.02]
-        if not below:
-            return False, False
-        _, relation, k, place = max(below, key=lambda b: b[0])
-        return k in covered_places(self.spots, node, relation), place.clearance < OPEN_ABOVE
+        return max(below, key=lambda b: b[0]) if below else None
+
+    def _rim_rise(self, node: str, position: np.ndarray, height: float) -> float:
+        """How far (m) an object of `height` m at `position` must rise so that its bottom passes PASS_ABOVE over
+        the rim furniture `node` has in front of the place it stands on (`rim_above`: a basin's front wall, a
+        shower's curb), drawn out through the front; 0 where there is none."""
+        support = self._support(node, position, height)
+        if support is None:
+            return 0.0
+        z, _, _, place = support
+        rim = rim_above(self.spots.furniture[node], place)
+        return 0.0 if rim <= 0.0 else max(0.0, z + rim + PASS_ABOVE - (position[2] - height / 2))

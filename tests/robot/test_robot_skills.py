@@ -226,6 +226,23 @@ def test_an_object_behind_another_on_a_shelf_must_rise_over_it_to_come_out() -> 
 
 
 @pytest.mark.physics
+def test_a_canister_in_the_bathroom_basin_is_lifted_over_its_rim_before_it_is_drawn_out() -> None:
+    """The wipes standing in the bathroom sink's basin (their top below its rim), picked for the kitchen
+    cabinet's shelf: gripped from the front and lifted 3 cm, then drawn out, the canister struck the basin's front
+    wall and fell over in the hand; lifted over the rim first (`Pick._rim_rise`), it comes out held."""
+    world, robot = _scene("disinfectant_wipes", (1.742, 7.593, 0.71 + CATALOG["disinfectant_wipes"].size[2] / 2
+                                                 + 0.003), "sink_bathroom", seed=0)
+    before = world.object_pose("disinfectant_wipes")[0]
+    assert robot._pick._rim_rise("sink_bathroom", before, CATALOG["disinfectant_wipes"].size[2]) > 0.15
+    positions = world.object_positions()
+    picked = robot.pick("disinfectant_wipes", "sink_bathroom", into="kitchen_cabinet")
+    assert picked.success, picked.reason
+    assert world.object_pose("disinfectant_wipes")[0][2] - before[2] > 0.15  # up over the rim, in the hand
+    drift, name = _others_moved(world, positions, "disinfectant_wipes")
+    assert drift < 0.02, f"{name} moved {drift * 100:.1f} cm"
+
+
+@pytest.mark.physics
 def test_a_wine_glass_behind_the_dishwashers_cup_comes_out_over_it_and_stays_in_the_hand() -> None:
     """Drawn out 3 cm off the rack, the wine glass at the back took the cup in front of it along; drawn out the
     fixed 0.35 m, it was still inside when raised, struck the top's edge and fell out of the hand."""
