@@ -352,7 +352,8 @@ class Place:
             return False
         graph = self.observer.update()
         touched = {self.observer.nodes[n] if n >= 0 else "" for n in self.observer.geom_node[others]}
-        return all(t == node or graph.parent_of(t) == node for t in touched if t != name)
+        # "": a geom of no node (a wall), where the object does not go
+        return all(t and (t == node or graph.parent_of(t) == node) for t in touched if t != name)
 
     def _touches_apartment(self, name: str) -> bool:
         """Whether object `name` touches anything but the robot now."""

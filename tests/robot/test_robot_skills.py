@@ -329,3 +329,21 @@ def test_a_lowering_may_touch_what_it_goes_onto_and_what_rides_in_the_held_objec
     assert "mail" in place._riders("trashcan", robot.observer.update())
     assert place._struck("trashcan", path) == ["newspaper"]  # it stands on it
     assert place._struck("trashcan", path, onto="newspaper") == []
+
+
+def test_an_object_touching_a_wall_does_not_rest_only_on_where_it_goes(world: World) -> None:
+    """A held object the hand lowered against a wall (a geom of no node) is not lying in its destination: the
+    check says so instead of asking the scene graph for the parent of the wall's empty node name (an unknown-node
+    error that ended an oracle evaluation)."""
+    from homer_sim.observe import SceneGraphObserver
+    from planners.skills.place import Place
+
+    place = Place.__new__(Place)  # the check alone: it reads what the object touches and the observed graph
+    place.observer = SceneGraphObserver(world)
+    wall = next(g for g in range(world.model.ngeom) if world.model.geom(g).name.startswith("wall/"))
+    basket = next(g for g in range(world.model.ngeom) if place.observer.geom_node[g] >= 0
+                  and place.observer.nodes[place.observer.geom_node[g]] == "basket_for_clothes")
+    place._touching = lambda name: np.array([basket])
+    assert place._rests_only_on("clothes_dress", "basket_for_clothes")
+    place._touching = lambda name: np.array([basket, wall])
+    assert not place._rests_only_on("clothes_dress", "basket_for_clothes")
