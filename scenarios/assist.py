@@ -174,7 +174,10 @@ class Helper:
                 log.exception("robot %s %s", step.action, step.target)
                 result = SkillResult(False, f"{SKILL_ERROR} in {step.action}: {type(error).__name__} {error}")
                 if step.obj and self.robot.held == step.obj:
-                    self._put_down(step.obj, by_obj[step.obj].source)
+                    try:
+                        self._put_down(step.obj, by_obj[step.obj].source)
+                    except Exception:  # the put-down meets the bug too: the hand keeps it and the plan stops
+                        log.exception("robot put-down of %s", step.obj)
             if result is None:
                 continue
             self.log.steps.append(StepOutcome(now, step, result.success, result.reason,

@@ -164,3 +164,35 @@ def test_a_skill_that_raises_fails_its_relocation_and_the_turn_goes_on(world) ->
     assert "KeyError" in failed.reason
     assert carried.relocation == milk and carried.done
     assert [s.success for s in helper.log.steps] == [False, True, True]
+
+
+def test_a_put_down_that_raises_after_a_skill_error_stops_the_plan_not_the_day(world) -> None:
+    """A place raising with the bowl in the hand, and the put-down after it raising too (the same bug): the bowl's
+    relocation fails with the cause named, the robot, still holding it, stops the turn's plan, and nothing escapes
+    to end the day (an unknown-node error did so twice over and ended a whole evaluation)."""
+    from types import SimpleNamespace
+
+    from homer_sim.observe import SceneGraphObserver
+    from planners.skills import SkillResult
+    from scenarios.assist import AssistLog, Helper
+    from scenarios.psi import PlanStep, Relocation
+
+    def pick(obj: str, node: str, into: str) -> SkillResult:
+        robot.held = obj
+        return SkillResult(True)
+
+    def place(target: str) -> SkillResult:
+        raise KeyError("")
+
+    helper = Helper.__new__(Helper)  # the turn's bookkeeping only: no controller, so the put-down raises too
+    helper.world, helper.recording, helper.log, helper.waiting, helper._placed_at = world, None, AssistLog(), [], {}
+    robot = helper.robot = SimpleNamespace(observer=SceneGraphObserver(world), held=None, pick=pick, place=place)
+    bowl, milk = (Relocation("bowl", "cupboard", "table_dining_room", 1, 0.9),
+                  Relocation("milk", "fridge", "table_dining_room", 1, 0.9))
+    steps = [PlanStep("pick", "bowl", bowl.source, "bowl"),
+             PlanStep("place", bowl.destination, bowl.destination, "bowl"),
+             PlanStep("pick", "milk", milk.source, "milk")]
+    helper._carry_out(steps, [bowl, milk], 360, float(world.data.time))
+    [failed] = helper.log.relocations
+    assert failed.relocation == bowl and not failed.done and cause_of(failed.reason) == "skill error"
+    assert robot.held == "bowl" and [s.step.action for s in helper.log.steps] == ["pick", "place"]
