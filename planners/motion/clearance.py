@@ -30,9 +30,13 @@ class Held:
 class ClearanceCheck:
     """Whether a robot configuration touches the apartment, on a scratch copy of the data (never the live one).
 
-    Contacts of the fingers are ignored (they are meant to touch the part); every other robot geom must keep
-    MARGIN m from everything. With a held object, the fingers are checked too, and the object must keep MARGIN
-    from everything but the robot.
+    Contacts of the fingers are ignored (they are meant to touch the part); every other robot geom must touch
+    nothing. With a held object, the fingers are checked too, and the object must touch nothing but the robot.
+    The model's geom margins are 0, so mj_collision reports overlaps only: a contact closer than MARGIN counts,
+    but none is reported short of touching, and a planned move may pass a neighbour at no distance (the arm's
+    tracking lag mid-swing then makes it strike). Giving the check's robot geoms a contact margin of MARGIN was
+    tried: an arm's swing no longer swept a radio off a tv stand, but a vegetable carried from a cutting board
+    to the fridge then knocked an egg 5.5 cm, so it is not in.
 
     Collisions run on a copy of the model whose filter keeps only the pairs a check reads (robot or held object
     against the rest): apartment geoms lose their conaffinity, so the ~100 resting objects and the furniture are
