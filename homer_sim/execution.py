@@ -177,8 +177,11 @@ class TaskRun:
                     self.workers.add(worker)
                     yield result
         finally:  # Ctrl-C, a failed task or an abandoned run: nothing keeps running for nobody
-            for ref in pending:  # KeyboardInterrupt in the task; force=True (kill the worker) races a task that
-                ray.cancel(ref)  # is just finishing, and Ray 2.x then aborts the driver ("not pending")
+            if pending and not self._ray_started:
+                _cancel(ray, pending)
+            # else __exit__'s ray.shutdown ends this driver's job, and Ray stops the job's tasks with it. No cancel
+            # then: ray.cancel (forced or not) of a task finishing at that moment makes Ray 2.60 abort the driver
+            # ("Tried to complete task that was not pending", exit 1), and at Ctrl-C tasks of equal length often do
 
     def _connect(self, ray: Any) -> None:
         if not ray.is_initialized():
@@ -194,6 +197,14 @@ class TaskRun:
         if self._cluster_cpus < self.cpus_per_task:
             raise ExecutionError(f"the Ray cluster at {self.backend.ray!r} has {self._cluster_cpus:g} CPUs; a task "
                                  f"needs {self.cpus_per_task}")
+
+
+def _cancel(ray: Any, pending: dict) -> None:
+    """Cancels the tasks of a connection the caller owns (which outlives the run): those not yet finished, to
+    narrow the window in which a cancel races a task's end (see TaskRun._ray)."""
+    _, running = ray.wait(list(pending), num_returns=len(pending), timeout=0)
+    for ref in running:
+        ray.cancel(ref)  # not forced: KeyboardInterrupt in the task, the worker kept
 
 
 def _nothing() -> Iterator[Any]:
