@@ -23,10 +23,9 @@ TICKS = (END_MIN - 360) // 10 + 1  # snapshots 06:00 ... 07:20
 
 
 @pytest.fixture(scope="module")
-def setup(tmp_path_factory: pytest.TempPathFactory) -> Setup:
-    folder = tmp_path_factory.mktemp("env")
+def setup(breakfast_cache: Path) -> Setup:
     with pytest.MonkeyPatch.context() as patch:
-        patch.setenv("HOMER_SIM_CACHE", str(folder / "cache"))
+        patch.setenv("HOMER_SIM_CACHE", str(breakfast_cache))
         yield make_setup("breakfast", end_min=END_MIN, train_days=10, test_days=1)
 
 

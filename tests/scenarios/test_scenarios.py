@@ -1,8 +1,8 @@
 """The breakfast scenario end to end: dataset, predictor, the assisted run, the reference, the recording.
 
-One morning is run once for the module, then the same morning with breakfast skipped (a fresh cache folder: the
-dataset is generated and the predictor trained as on a new machine); every check reads the observed scene graph
-of the assisted day, never the plan.
+One morning is run once for the module, then the same morning with breakfast skipped (in the session's fresh cache
+folder: the first module to need them generates the dataset and trains the predictor, as on a new machine); every
+check reads the observed scene graph of the assisted day, never the plan.
 """
 
 from __future__ import annotations
@@ -33,12 +33,11 @@ SPEC = DataSpec(train_days=10, test_days=1)
 
 
 @pytest.fixture(scope="module")
-def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A fresh cache folder for the module: the first run generates the dataset and trains, as on a new machine."""
-    folder = tmp_path_factory.mktemp("breakfast")
+def folder(tmp_path_factory: pytest.TempPathFactory, breakfast_cache: Path) -> Path:
+    """A fresh folder for the module's recordings, the session's breakfast cache set (see `breakfast_cache`)."""
     with pytest.MonkeyPatch.context() as patch:
-        patch.setenv("HOMER_SIM_CACHE", str(folder / "cache"))
-        yield folder
+        patch.setenv("HOMER_SIM_CACHE", str(breakfast_cache))
+        yield tmp_path_factory.mktemp("breakfast")
 
 
 @pytest.fixture(scope="module")
