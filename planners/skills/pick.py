@@ -160,7 +160,7 @@ class Pick:
         clear = [self._fingers_fit(g) for g in grasps]
         offsets = [(o, fits) for g, fits in zip(grasps, clear, strict=True) for o in offset_grasps(cls, quat, g)
                    if self._fingers_fit(o)]
-        unchecked = []
+        unchecked, upright = [], not self.arm.fallen_over(name)
         for grasp in rank_from_above([*zip(grasps, clear, strict=True), *offsets]):  # a clear way in first
             outcome = self._grasp_from_above(name, grasp, stand_failure, checked_only=True)
             if outcome is None:
@@ -170,12 +170,16 @@ class Pick:
                 self.arm.held = name
                 return outcome
             failures.append(f"{grasp.kind}: {outcome.reason}")
+            if upright and (knocked := self._knocked_over(name, node, failures)):
+                return knocked
         for grasp in unchecked:
             outcome = self._grasp_from_above(name, grasp, stand_failure)
             if outcome.success:
                 self.arm.held = name
                 return outcome
             failures.append(f"{grasp.kind}: {outcome.reason}")
+            if upright and (knocked := self._knocked_over(name, node, failures)):
+                return knocked
         return SkillResult(False, f"{name}: every grasp failed ({'; '.join(failures)})")
 
     def _above_candidates(self, node: str, cls, position: np.ndarray, quat: np.ndarray) -> list[Grasp]:
@@ -291,14 +295,24 @@ class Pick:
                 self.arm.held = name
                 return outcome
             failures.append(f"{grasp.kind}: {outcome.reason}")
+            if knocked := self._knocked_over(name, node, failures):
+                return knocked
             now = self.world.object_pose(name)
-            if replan and disturbed(position, quat, *now) and not self.arm.fallen_over(name):
+            if replan and disturbed(position, quat, *now):
                 again = self._pick_from_shelf(name, node, cls, *now, out, replan=False)
                 return again if again.success else SkillResult(False, f"{again.reason} (moved by {failures})")
         if unreachable:
             failures.append(f"{', '.join(map(str, unreachable))}: no free base pose reaches the grasp without the arm "
                             f"touching {node} or its contents")
         return SkillResult(False, f"{name}: every grasp in {node} failed ({'; '.join(failures)})")
+
+    def _knocked_over(self, name: str, node: str, failures: list[str]) -> SkillResult | None:
+        """The failure of a pick whose last grasp (of those that `failures` lists) knocked the upright `name` over,
+        else None: the grasps left were made for it standing (a juice carton knocked over on a bookshelf was reached
+        for four more times where it had stood, the fingers closing on nothing)."""
+        if not self.arm.fallen_over(name):
+            return None
+        return SkillResult(False, f"{name}: knocked over on {node} ({'; '.join(failures)})")
 
     def _held_by(self, name: str, grasp: Grasp) -> Held:
         """Object `name` as `grasp` would hold it (standing as it stands now), for clearance checks of its lift."""

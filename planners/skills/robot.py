@@ -64,13 +64,18 @@ class Robot:
         return self.arm.tuck
 
     def pick(self, name: str, node: str | None = None, into: str | None = None) -> SkillResult:
-        """Grasp object `name` and lift it (see `planners.skills.pick.Pick.pick`). One that has fallen over is
-        taken from above as it lies; where it goes next (`into`) onto a shelf, which takes it upright and held
+        """Grasp object `name` and lift it (see `planners.skills.pick.Pick.pick`). One that has fallen over (or that
+        a grasp knocks over) is taken from above as it lies; where it goes next (`into`) onto a shelf, which takes it upright and held
         from the side, it is first stood up on the nearest open top without a door (`set_down` stands it up as
         it lowers it) and picked again; so is one held from the side that goes into a basin (`_into_basin`),
         picked again from above."""
         fallen = self.arm.fallen_over(name)
         result = self._pick.pick(name, node, into)
+        if not result.success and not fallen and self.held is None and self.arm.fallen_over(name):
+            fallen = True  # knocked over by a grasp: picked again as it lies now
+            at = self.observer.update().anchor_of(name, self.world.object_names)
+            again = self._pick.pick(name, at if at in self.navigator.furniture else None, into)
+            result = again if again.success else SkillResult(False, f"{result.reason}; then {again.reason}")
         if not result.success or into is None:
             return result
         if fallen and shelves_inside(self.spots, self.navigator.furniture.get(into), into, None):
