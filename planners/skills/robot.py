@@ -64,11 +64,11 @@ class Robot:
         return self.arm.tuck
 
     def pick(self, name: str, node: str | None = None, into: str | None = None) -> SkillResult:
-        """Grasp object `name` and lift it (see `planners.skills.pick.Pick.pick`). One that has fallen over (or that
-        a grasp knocks over) is taken from above as it lies; where it goes next (`into`) onto a shelf, which takes it upright and held
-        from the side, it is first stood up on the nearest open top without a door (`set_down` stands it up as
-        it lowers it) and picked again; so is one held from the side that goes into a basin (`_into_basin`),
-        picked again from above."""
+        """Grasp object `name` and lift it (see `planners.skills.pick.Pick.pick`). One that has fallen over (or
+        that a grasp knocks over) is taken from above as it lies; where it goes next (`into`) onto a shelf, which
+        takes it upright and held from the side, it is first stood up on the nearest open top without a door
+        (`set_down` stands it up as it lowers it) and picked again; so is one held from the side that goes into a
+        basin (`_into_basin`), picked again from above."""
         fallen = self.arm.fallen_over(name)
         result = self._pick.pick(name, node, into)
         if not result.success and not fallen and self.held is None and self.arm.fallen_over(name):
