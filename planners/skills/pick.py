@@ -127,16 +127,16 @@ class Pick:
                          stand: np.ndarray, failures: list[str]) -> SkillResult | None:
         """Pick `name` (at `position`, m; body `quat`, wxyz) from furniture `node`'s open top as a shelf takes
         it (see `_pick_from_shelf` with `out`), from each of its sides that faces `stand` (the xy, m, where the
-        robot would stand), nearest first; the successful outcome, or None with each side's failure added to
-        `failures`."""
+        robot would stand), nearest first; the successful outcome (or the failure that knocked it over), or None
+        with each side's failure added to `failures`."""
         toward = (stand - position[:2]) / max(float(np.linalg.norm(stand - position[:2])), 1e-9)
         yaw = 2.0 * math.atan2(quat[3], quat[0])
         axes = [np.array([math.cos(yaw + a), math.sin(yaw + a)]) for a in np.arange(4) * math.pi / 2]
         for out in sorted(axes, key=lambda a: -float(a @ toward)):  # the object's sides, nearest side first
             if out @ toward > -0.5:
                 outcome = self._pick_from_shelf(name, node, cls, position, quat, out)
-                if outcome.success:
-                    return outcome
+                if outcome.success or self.arm.fallen_over(name):  # knocked over: the other sides' grasps and
+                    return outcome  # those from above were made for it standing (see `_knocked_over`)
                 failures.append(outcome.reason.removeprefix(f"{name}: "))
         return None
 
