@@ -141,13 +141,22 @@ class Analogs(Predictor):
     def rollout(self, parent: np.ndarray, minute: np.ndarray, steps: int) -> Rollout:
         """Direct prediction of every step from the observed graphs (no feedback). parent (B, N); minute (B,)."""
         parent = np.asarray(parent, dtype=np.int64)
-        probs = np.zeros((steps, len(parent), self.n_nodes, self.n_nodes), dtype=np.float32)
+        probs = np.empty((steps, len(parent), len(self.rows), self.n_nodes), dtype=np.float32)  # movable rows
         backoff = self._backoff(one_hot_parents(parent, self.n_nodes), minute, steps)
         for b in range(len(parent)):
-            probs[:, b, self.rows] = self.forecast(parent[b], float(minute[b]), steps,
-                                                   None if backoff is None else backoff[:, b])
-        rollout = self._finish(parent, [summarise_step(p, parent) for p in probs])
-        return replace(rollout, other_margin=_margin(probs, parent, rollout.other_confidence, self.movable))
+            probs[:, b] = self.forecast(parent[b], float(minute[b]), steps, None if backoff is None else backoff[:, b])
+        observed = parent[:, self.rows]
+        summaries = []
+        for p in probs:  # static nodes: their parent, with confidence 0 (`_finish` keeps them there)
+            full = [parent.copy(), np.zeros(parent.shape, np.float32), parent.copy(), np.zeros(parent.shape, np.float32)
+                    ]
+            for whole, part in zip(full, summarise_step(p, observed), strict=True):
+                whole[:, self.rows] = part
+            summaries.append(full)
+        rollout = self._finish(parent, summaries)
+        margin = np.zeros(rollout.other_confidence.shape, dtype=np.float32)
+        margin[..., self.rows] = _margin(probs, observed, rollout.other_confidence[..., self.rows], True)
+        return replace(rollout, other_margin=margin)
 
     def _backoff(self, probs: np.ndarray, minute: np.ndarray, steps: int) -> np.ndarray | None:
         """The chain's forecast of the movable objects from probs (B, N, N) observed at `minute` (B,): Shape
@@ -174,7 +183,8 @@ class Analogs(Predictor):
 
 def _margin(probs: np.ndarray, observed: np.ndarray, other: np.ndarray, movable: np.ndarray) -> np.ndarray:
     """The best other parent's margin over every other destination, p_d - (1 - p_stay - p_d) clipped at 0, from
-    probs (S, B, N, N), observed parents (B, N) and p_d (S, B, N): Shape (S, B, N), 0 for static nodes.
+    probs (S, B, R, N) of R nodes' parents, their observed parents (B, R) and p_d (S, B, R): Shape (S, B, R), 0 for
+    static nodes (`movable`: (R,) bool, or True where every node is movable).
 
     That margin is what acting on the move is worth in expectation where a wrong destination costs as much as a
     right one gains (the paper's objective, the robot's wrong moves): when an object's move is likely but split

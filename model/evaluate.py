@@ -39,10 +39,10 @@ from model.metrics import (
     F1_STEPS,
     Counts,
     Queries,
+    RobotReplay,
     day_queries,
     gate,
     relocation_counts,
-    robot_counts,
     score,
     window_steps,
 )
@@ -114,6 +114,7 @@ def tune_targets(predictor: Predictor, queries: Queries | Sequence[tuple[Predict
     scored: dict[str, list[tuple[bool, float, int, dict[str, float]]]] = {t: [] for t in targets}
     nodes = list(predictor.meta.nodes)
     outside = nodes.index(OUTSIDE) if OUTSIDE in nodes else -1
+    replay = RobotReplay(queries, steps, predictor.movable, outside) if "assist" in targets else None
     for values in itertools.product(*(predictor.grid[k] for k in names)):
         for fold, _ in folds:
             fold.set_params(**dict(zip(names, values, strict=True)))
@@ -124,7 +125,7 @@ def tune_targets(predictor: Predictor, queries: Queries | Sequence[tuple[Predict
             params = {**dict(zip(names, values, strict=True)), "threshold": float(threshold)}
             for target, rows in scored.items():
                 for rule, (admissible, value) in _tuning_scores(target, queries, predicted[uses_margin(target)], steps,
-                                                                predictor.movable, outside):
+                                                                predictor.movable, replay):
                     rows.append((admissible, value, -len(rows), params | rule))
     best = {}
     for target, rows in scored.items():
@@ -140,26 +141,21 @@ def uses_margin(target: str) -> bool:
 
 
 def _tuning_scores(target: str, queries: Queries, predicted: np.ndarray, steps: int, movable: np.ndarray,
-                   outside: int = -1) -> list[tuple[dict[str, float], tuple[bool, float]]]:
+                   replay: RobotReplay | None = None) -> list[tuple[dict[str, float], tuple[bool, float]]]:
     """[(decision-rule params beside the threshold, (admissible, score))] of one setting's predictions; higher is
-    better. "assist" scores each `act_steps` MIN_ACT_STEPS .. steps (`_robot_score`; `outside`: the index of that
-    root node, -1 if none); the other targets act on the whole window (act_steps 0)."""
+    better. "assist" scores each `act_steps` MIN_ACT_STEPS .. steps of the robot's own loop on the queries (`replay`,
+    `model.metrics.robot_counts`): fetches made ahead minus wrong moves, admissible when at most MAX_ROBOT_WRONG_PCT
+    of its relocations are wrong. The other targets act on the whole window (act_steps 0)."""
     if target == "assist":
-        return [({"act_steps": float(k)}, _robot_score(queries, predicted, steps, movable, k, outside))
-                for k in range(min(MIN_ACT_STEPS, steps), steps + 1)]
+        act = range(min(MIN_ACT_STEPS, steps), steps + 1)
+        return [({"act_steps": float(k)}, (counts.wrong <= MAX_ROBOT_WRONG_PCT / 100.0 * counts.relocations,
+                                           float(counts.assistance())))
+                for k, counts in zip(act, replay.counts(predicted, act), strict=True)]
     if target == "f1":
         return [({"act_steps": 0.0}, (True, float(relocation_counts(queries, predicted, movable, steps).f1().mean())))]
     counts = score(queries, predicted, steps, movable)
     return [({"act_steps": 0.0}, (counts.unused_wrong <= MAX_UNUSED_WRONG_PCT / 100.0 * counts.unused,
                                   counts.objective()))]
-
-
-def _robot_score(queries: Queries, predicted: np.ndarray, steps: int, movable: np.ndarray, act_steps: int,
-                 outside: int = -1) -> tuple[bool, float]:
-    """The assistance objective as the robot meets it (`model.metrics.robot_counts`): fetches made ahead minus
-    wrong moves, admissible when at most MAX_ROBOT_WRONG_PCT of its relocations are wrong."""
-    counts = robot_counts(queries, predicted, steps, movable, act_steps, outside)
-    return counts.wrong <= MAX_ROBOT_WRONG_PCT / 100.0 * counts.relocations, float(counts.assistance())
 
 
 def days_fingerprint(days: Sequence[Day]) -> str:

@@ -252,43 +252,79 @@ def robot_counts(queries: Queries, predicted: np.ndarray, window_steps: int, mov
     to be at the places (old and new parents) of their latest moves, for `window_steps` steps after them (eating
     at the table they laid, the robot may not clear it: `scenarios.psi.psi`'s in_use). Without this the replay
     credits the predictor's surest moves, the person clearing up where they sit, which the robot never makes."""
-    steps = np.minimum(queries.valid, window_steps)
-    true_moved, true_dest = first_change(queries.observed, queries.future, steps)
-    pred_moved, pred_dest = first_change(queries.observed, predicted, np.minimum(steps, act_steps))
-    movable = np.asarray(movable, dtype=bool)
-    pred_moved &= movable[None]
-    if outside >= 0:
-        root = roots(queries.observed)
-        pred_moved &= (root != outside) & (np.take_along_axis(root, np.maximum(pred_dest, 0), axis=1) != outside)
-    starts = np.r_[True, np.diff(queries.minute) <= 0]
-    changed = np.zeros(queries.observed.shape, dtype=bool)  # (Q, N): moved since the previous query of the day
-    changed[1:] = (queries.observed[1:] != queries.observed[:-1]) & movable[None] & ~starts[1:, None]
-    relocations = correct = put_back = 0
-    near: set[int] = set()  # the places of the person's latest moves (where they are taken to be)
-    latest = -window_steps - 1  # the query those moves were seen at
-    held: dict[int, tuple[int, int]] = {}  # object -> (query it was moved at, where it came from)
-    unwanted: dict[int, int] = {}  # object -> where its unused help went back to
-    for i, observed in enumerate(queries.observed):
-        if starts[i]:
-            held, unwanted = {}, {}
-            near, latest = set(), i - window_steps - 1
-        if changed[i].any():
-            near = set(queries.observed[i - 1][changed[i]].tolist()) | set(observed[changed[i]].tolist())
-            latest = i
-        person_at = near if i - latest < window_steps else set()
-        for o, (since, source) in list(held.items()):
-            if observed[o] != source:  # the person moved it: the hold ends
-                del held[o]
-            elif i - since > window_steps:  # unused: back to its source
-                del held[o]
-                relocations += 1  # never correct: the person's next move is away from where it lies
-                put_back += 1
-                unwanted[o] = source
-        unwanted = {o: p for o, p in unwanted.items() if observed[o] == p}
-        for o in np.flatnonzero(pred_moved[i]):
-            if o in held or o in unwanted or observed[o] in person_at or pred_dest[i, o] in person_at:
-                continue
-            relocations += 1
-            correct += int(true_moved[i, o] and true_dest[i, o] == pred_dest[i, o])
-            held[int(o)] = (i, int(observed[o]))
-    return RobotCounts(relocations, correct, put_back)
+    return RobotReplay(queries, window_steps, movable, outside).counts(predicted, (act_steps,))[0]
+
+
+def first_steps(observed: np.ndarray, sequence: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The step at which each node first leaves its observed parent, and where to: `first_change` for every count
+    of steps at once (a node changed within its first c steps where first < c, and then to destination).
+
+    observed: (Q, N); sequence: (Q, K, N). Returns first (Q, N) int (K where it never leaves) and destination
+    (Q, N) int (its parent at that step; any value where it never leaves)."""
+    differs = sequence != observed[:, None, :]
+    first = differs.argmax(axis=1)
+    destination = np.take_along_axis(sequence, first[:, None, :], axis=1)[:, 0]
+    return np.where(differs.any(axis=1), first, sequence.shape[1]), destination
+
+
+class RobotReplay:
+    """`robot_counts` on fixed queries for many predictions and act_steps (a tuning grid): what depends only on the
+    queries (the true first moves, the roots, the person's moves) is found once."""
+
+    def __init__(self, queries: Queries, window_steps: int, movable: np.ndarray, outside: int = -1) -> None:
+        self.queries, self.window_steps, self.outside = queries, window_steps, outside
+        self.steps = np.minimum(queries.valid, window_steps)
+        self.true_moved, self.true_dest = first_change(queries.observed, queries.future, self.steps)
+        self.movable = np.asarray(movable, dtype=bool)
+        self.root = roots(queries.observed) if outside >= 0 else None
+        self.starts = np.r_[True, np.diff(queries.minute) <= 0]
+        changed = np.zeros(queries.observed.shape, dtype=bool)  # (Q, N): moved since the previous query of the day
+        changed[1:] = (queries.observed[1:] != queries.observed[:-1]) & self.movable[None] & ~self.starts[1:, None]
+        self.changed = changed
+
+    def counts(self, predicted: np.ndarray, act_steps: Sequence[int]) -> list[RobotCounts]:
+        """RobotCounts of `predicted` (Shape (Q, K', N) parents) for each of `act_steps`."""
+        first, destination = first_steps(self.queries.observed, predicted)
+        allowed = np.broadcast_to(self.movable[None], first.shape)
+        if self.root is not None:
+            allowed = allowed & (self.root != self.outside) & (
+                np.take_along_axis(self.root, np.clip(destination, 0, None), axis=1) != self.outside)
+        results = []
+        for k in act_steps:
+            moved = first < np.minimum(self.steps, k)[:, None]
+            results.append(self._replay(moved & allowed, np.where(moved, destination, -1)))
+        return results
+
+    def _replay(self, pred_moved: np.ndarray, pred_dest: np.ndarray) -> RobotCounts:
+        """The robot's decisions over the queries in order (see `robot_counts`)."""
+        queries, window_steps, starts, changed = self.queries, self.window_steps, self.starts, self.changed
+        true_moved, true_dest = self.true_moved, self.true_dest
+        relocations = correct = put_back = 0
+        near: set[int] = set()  # the places of the person's latest moves (where they are taken to be)
+        latest = -window_steps - 1  # the query those moves were seen at
+        held: dict[int, tuple[int, int]] = {}  # object -> (query it was moved at, where it came from)
+        unwanted: dict[int, int] = {}  # object -> where its unused help went back to
+        for i, observed in enumerate(queries.observed):
+            if starts[i]:
+                held, unwanted = {}, {}
+                near, latest = set(), i - window_steps - 1
+            if changed[i].any():
+                near = set(queries.observed[i - 1][changed[i]].tolist()) | set(observed[changed[i]].tolist())
+                latest = i
+            person_at = near if i - latest < window_steps else set()
+            for o, (since, source) in list(held.items()):
+                if observed[o] != source:  # the person moved it: the hold ends
+                    del held[o]
+                elif i - since > window_steps:  # unused: back to its source
+                    del held[o]
+                    relocations += 1  # never correct: the person's next move is away from where it lies
+                    put_back += 1
+                    unwanted[o] = source
+            unwanted = {o: p for o, p in unwanted.items() if observed[o] == p}
+            for o in np.flatnonzero(pred_moved[i]):
+                if o in held or o in unwanted or observed[o] in person_at or pred_dest[i, o] in person_at:
+                    continue
+                relocations += 1
+                correct += int(true_moved[i, o] and true_dest[i, o] == pred_dest[i, o])
+                held[int(o)] = (i, int(observed[o]))
+        return RobotCounts(relocations, correct, put_back)

@@ -11,7 +11,18 @@ import pytest
 from homer_sim.data.dataset import Dataset, Day
 from model.evaluate import MAX_ROBOT_WRONG_PCT, MIN_ACT_STEPS, rollout_queries, summarise, tune
 from model.methods import make_predictor
-from model.metrics import Counts, Queries, day_queries, first_change, gate, robot_counts, score, window_steps
+from model.metrics import (
+    Counts,
+    Queries,
+    RobotReplay,
+    day_queries,
+    first_change,
+    first_steps,
+    gate,
+    robot_counts,
+    score,
+    window_steps,
+)
 from model.predictor import ModelError, Rollout
 from model.synthetic import write_synthetic_dataset
 
@@ -182,3 +193,32 @@ def test_the_replayed_robot_keeps_away_from_where_the_person_just_moved_things()
     assert (counts.relocations, counts.put_back) == (1, 0)  # acted once, at query 4, and held to the day's end
     predicted[:4] = observed[:4, None]  # the same robot with nothing predicted before query 4
     assert robot_counts(queries, predicted, 3, movable, 3) == counts
+
+
+def test_first_steps_is_first_change_for_every_count_of_steps() -> None:
+    """`first_steps` finds each node's first change once for every cap that `first_change` takes one at a time (the
+    tuning scores every act_steps of one prediction with it)."""
+    rng = np.random.default_rng(0)
+    observed = rng.integers(0, 3, size=(40, 6))
+    sequence = np.where(rng.random((40, 5, 6)) < 0.3, rng.integers(0, 3, size=(40, 5, 6)), observed[:, None])
+    first, destination = first_steps(observed, sequence)
+    for cap in range(6):
+        steps = np.minimum(rng.integers(0, 6, size=40), cap)
+        changed, where = first_change(observed, sequence, steps)
+        assert (changed == (first < steps[:, None])).all()
+        assert (where[changed] == destination[changed]).all()
+    assert changed.any() and (~changed).any()
+
+
+def test_a_replay_counts_each_act_steps_as_robot_counts_does(tmp_path) -> None:
+    write_synthetic_dataset(tmp_path, np.random.default_rng(4), households=1, train_days=8, test_days=1, size="small")
+    dataset = Dataset(tmp_path)
+    days = dataset.load("household_a", "train")
+    predictor = make_predictor("markov", dataset.meta, progress=False)
+    predictor.fit(days[:6], days[6:])
+    queries = day_queries(days[6:], 3)
+    predicted = gate(rollout_queries(predictor, queries, 3), queries.observed, 0.2)
+    replay = RobotReplay(queries, 3, predictor.movable, 0)
+    expected = [robot_counts(queries, predicted, 3, predictor.movable, k, 0) for k in (1, 2, 3)]
+    assert replay.counts(predicted, (1, 2, 3)) == expected
+    assert len(set(expected)) > 1
