@@ -272,19 +272,30 @@ class RobotReplay:
     queries (the true first moves, the roots, the person's moves) is found once."""
 
     def __init__(self, queries: Queries, window_steps: int, movable: np.ndarray, outside: int = -1) -> None:
-        self.queries, self.window_steps, self.outside = queries, window_steps, outside
+        self.observed, self.window_steps, self.outside = queries.observed, window_steps, outside
         self.steps = np.minimum(queries.valid, window_steps)
-        self.true_moved, self.true_dest = first_change(queries.observed, queries.future, self.steps)
+        true_moved, true_dest = first_change(queries.observed, queries.future, self.steps)
+        self.truth = np.where(true_moved, true_dest, -2).tolist()  # (Q, N): the first true move's place, else -2
         self.movable = np.asarray(movable, dtype=bool)
         self.root = roots(queries.observed) if outside >= 0 else None
-        self.starts = np.r_[True, np.diff(queries.minute) <= 0]
+        starts = np.r_[True, np.diff(queries.minute) <= 0]
         changed = np.zeros(queries.observed.shape, dtype=bool)  # (Q, N): moved since the previous query of the day
-        changed[1:] = (queries.observed[1:] != queries.observed[:-1]) & self.movable[None] & ~self.starts[1:, None]
-        self.changed = changed
+        changed[1:] = (queries.observed[1:] != queries.observed[:-1]) & self.movable[None] & ~starts[1:, None]
+        self.starts = starts.tolist()
+        self.person_at: list[set[int]] = []  # per query: where the person is taken to be (see `robot_counts`)
+        near: set[int] = set()  # the places of the person's latest moves
+        latest = -window_steps - 1  # the query those moves were seen at
+        for i, moved in enumerate(changed):
+            if starts[i]:
+                near, latest = set(), i - window_steps - 1
+            if moved.any():
+                near = set(queries.observed[i - 1][moved].tolist()) | set(queries.observed[i][moved].tolist())
+                latest = i
+            self.person_at.append(near if i - latest < window_steps else set())
 
     def counts(self, predicted: np.ndarray, act_steps: Sequence[int]) -> list[RobotCounts]:
         """RobotCounts of `predicted` (Shape (Q, K', N) parents) for each of `act_steps`."""
-        first, destination = first_steps(self.queries.observed, predicted)
+        first, destination = first_steps(self.observed, predicted)
         allowed = np.broadcast_to(self.movable[None], first.shape)
         if self.root is not None:
             allowed = allowed & (self.root != self.outside) & (
@@ -292,26 +303,23 @@ class RobotReplay:
         results = []
         for k in act_steps:
             moved = first < np.minimum(self.steps, k)[:, None]
-            results.append(self._replay(moved & allowed, np.where(moved, destination, -1)))
+            results.append(self._replay(moved & allowed, destination))
         return results
 
     def _replay(self, pred_moved: np.ndarray, pred_dest: np.ndarray) -> RobotCounts:
-        """The robot's decisions over the queries in order (see `robot_counts`)."""
-        queries, window_steps, starts, changed = self.queries, self.window_steps, self.starts, self.changed
-        true_moved, true_dest = self.true_moved, self.true_dest
+        """The robot's decisions over the queries in order (see `robot_counts`): it acts on the objects of
+        pred_moved (Q, N) bool, each to its place in pred_dest (Q, N)."""
+        window_steps, person_at = self.window_steps, self.person_at
+        queried, objects = np.nonzero(pred_moved)  # row-major: by query, then object
+        places = pred_dest[queried, objects].tolist()
+        bounds = np.searchsorted(queried, np.arange(len(pred_moved) + 1)).tolist()
+        objects = objects.tolist()
         relocations = correct = put_back = 0
-        near: set[int] = set()  # the places of the person's latest moves (where they are taken to be)
-        latest = -window_steps - 1  # the query those moves were seen at
         held: dict[int, tuple[int, int]] = {}  # object -> (query it was moved at, where it came from)
         unwanted: dict[int, int] = {}  # object -> where its unused help went back to
-        for i, observed in enumerate(queries.observed):
-            if starts[i]:
+        for i, observed in enumerate(self.observed.tolist()):
+            if self.starts[i]:
                 held, unwanted = {}, {}
-                near, latest = set(), i - window_steps - 1
-            if changed[i].any():
-                near = set(queries.observed[i - 1][changed[i]].tolist()) | set(observed[changed[i]].tolist())
-                latest = i
-            person_at = near if i - latest < window_steps else set()
             for o, (since, source) in list(held.items()):
                 if observed[o] != source:  # the person moved it: the hold ends
                     del held[o]
@@ -320,11 +328,14 @@ class RobotReplay:
                     relocations += 1  # never correct: the person's next move is away from where it lies
                     put_back += 1
                     unwanted[o] = source
-            unwanted = {o: p for o, p in unwanted.items() if observed[o] == p}
-            for o in np.flatnonzero(pred_moved[i]):
-                if o in held or o in unwanted or observed[o] in person_at or pred_dest[i, o] in person_at:
+            if unwanted:
+                unwanted = {o: p for o, p in unwanted.items() if observed[o] == p}
+            truth = self.truth[i]
+            for j in range(bounds[i], bounds[i + 1]):
+                o, place = objects[j], places[j]
+                if o in held or o in unwanted or observed[o] in person_at[i] or place in person_at[i]:
                     continue
                 relocations += 1
-                correct += int(true_moved[i, o] and true_dest[i, o] == pred_dest[i, o])
-                held[int(o)] = (i, int(observed[o]))
-        return RobotCounts(relocations, correct, put_back)
+                correct += truth[o] == place
+                held[o] = (i, observed[o])
+        return RobotCounts(relocations, int(correct), put_back)
