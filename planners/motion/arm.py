@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -115,27 +116,31 @@ class Arm:
         q[self.shoulder_lift] = RAISED_SHOULDER
         return q
 
-    def reach(self, q_goal: np.ndarray, grip: float | None = None) -> None:
+    def reach(self, q_goal: np.ndarray, grip: float | None = None, abort: Callable[[], bool] | None = None
+              ) -> bool:
         """Move to configuration q_goal (shape (13,)); from the tuck posture straight there if that swing, the
         fingers opening to `grip` (m per finger) on the way, touches nothing, else through `raised`, quicker (the
         hand is empty). From `raised` the fingers open on the way only if that leg is clear with them open, else
         once the arm is there: the open pads of a hand coming down from the raised arm swept a keyboard 77 cm
-        across a desk."""
+        across a desk. Returns False where `abort()` stopped the move (see `Controller.move_through`)."""
+        moved = True
         if self.folded:
             opened = q_goal.copy()
             if grip is not None:
                 opened[self.controller.n_body:] = grip
             if self.swing_clear(self.controller.target, opened):
-                self.controller.move_through([q_goal], grip=grip, **FREE_MOTION)
+                moved = self.controller.move_through([q_goal], grip=grip, abort=abort, **FREE_MOTION)
             else:
                 raised = self.raised(q_goal[3])
                 early = grip is None or self.swing_clear(raised, opened)
-                self.controller.move_through([raised, q_goal], grip=grip if early else None, **FREE_MOTION)
-                if not early:
+                moved = self.controller.move_through([raised, q_goal], grip=grip if early else None, abort=abort,
+                                                     **FREE_MOTION)
+                if moved and not early:
                     self.controller.set_grip(grip)
         else:
-            self.controller.move_through([q_goal], grip=grip)
+            moved = self.controller.move_through([q_goal], grip=grip, abort=abort)
         self.folded = False
+        return moved
 
     def retract(self) -> None:
         """Tuck the arm in place (the base and the torso stay): with an empty hand straight there if that swing

@@ -115,6 +115,11 @@ class Controller:
                 return False
         return True
 
+    def stop(self) -> None:
+        """Hold the body joints where they are now (the targets move back to the measured configuration: a servo
+        trailing a moving target would go on another 0.06-0.2 s of the move), the grip as it was commanded."""
+        self.command(self.q()[: self.n_body])
+
     def settle(self, tolerance: float = 0.01, max_seconds: float = 1.0) -> float:
         """Step until every body joint is within `tolerance` (m or rad) of its target; returns the final error."""
         error = np.inf

@@ -58,6 +58,10 @@ CLOSING_STEP = 0.005  # m per finger between the openings at which the fingers' 
 NEIGHBOUR_PUSH = 0.005  # m an open finger coming down onto a grasp may press into a neighbour (it slides it a
 # little aside; a side grasp of a glass grazed the wine glass beside it 3 mm, a roll's finger sank 12 mm into the
 # perfume it came down on)
+WATCH_PUSH = 0.005  # m another object may move while the hand goes in to a grasp before the hand stops and backs
+# off (a descent onto shampoo pushed the conditioner beside it 1 cm in 0.07 s, then 18 cm; a tin of coffee stopped
+# at 1 cm went on tipping to 2.9 cm; the collateral limit is 2 cm)
+PUSH_NOISE = 0.002  # m an object may move while a grasp goes in without counting as pushed by it
 DESCENT_DRIFT = 0.005  # m a loose waypoint of the descent onto a grasp may stray from the line (see `_descent`)
 
 
@@ -79,10 +83,35 @@ class Pick:
         above), so from a table it is then grasped that way first. Standing on the floor, the object is no
         obstacle to the base poses that reach it (`Navigator.exempt`)."""
         self.navigator.exempt = frozenset({self.world.object_index(name)})
+        graph = self.observer.update()
+        watched = np.array([other != name and graph.parent_of(other) != name for other in self.world.object_names])
+        self._watch = (self.world.object_positions(), watched)
         try:
             return self._pick(name, node, into)
         finally:
             self.navigator.exempt = frozenset()
+
+    def _pushed(self, since: np.ndarray | None = None) -> list[str]:
+        """The objects, other than the one picked and those on or in it, now more than WATCH_PUSH m from where they
+        stood when the pick began (the robot sees them move); with `since` (`world.object_positions()` when a grasp
+        began), only those moved by that grasp too: one a grasp before pushed stands in another's way no more."""
+        start, watched = self._watch
+        now = self.world.object_positions()
+        moved = np.linalg.norm(now - start, axis=1) > WATCH_PUSH
+        if since is not None:
+            moved &= np.linalg.norm(now - since, axis=1) > PUSH_NOISE
+        return [self.world.object_names[i] for i in np.flatnonzero(moved & watched)]
+
+    def _stopped(self, above: np.ndarray | None, quat: np.ndarray) -> SkillResult:
+        """Stop the hand on its way in to a grasp where it pushed something (`_pushed`), then back off: to `above`
+        (the approach point, m) where it was coming down from there, else straight to the tuck posture."""
+        pushed = self._pushed()
+        self.controller.stop()
+        if above is not None:  # the fingers open no wider: one pressing on what it pushed would push it further
+            self._back_off(above, quat, release=False)
+        else:
+            self.arm.retract()
+        return SkillResult(False, f"the hand pushed {', '.join(pushed)} on its way in, and stopped")
 
     def _pick(self, name: str, node: str | None, into: str | None) -> SkillResult:
         cls = self.world.object_class(name)
@@ -361,15 +390,18 @@ class Pick:
         struck = None if planned is None else self._neighbours_struck(name, planned, grasp.pre_opening)
         if struck:
             return SkillResult(False, f"an open finger would come down on {', '.join(struck)}")
-        self.arm.reach(path_in[0], grip=grasp.pre_opening)
-        if len(path_in) > 1:
-            self.controller.move_through(path_in[1:], grip=grasp.pre_opening)
+        since = self.world.object_positions()
+        pushing = lambda: bool(self._pushed(since))  # noqa: E731
+        if not self.arm.reach(path_in[0], grip=grasp.pre_opening, abort=pushing) or (len(path_in) > 1 and not (
+                self.controller.move_through(path_in[1:], grip=grasp.pre_opening, abort=pushing))):
+            return self._stopped(None, quat)
         self.controller.settle(0.003)
         down = self._descent(above, grasp.position, quat)
         if down is None:
             return SkillResult(False, "the descent leaves the arm's reach")
         start, _ = self.world.object_pose(name)
-        self.controller.move_through(down)
+        if not self.controller.move_through(down, abort=pushing):
+            return self._stopped(above, quat)
         self.controller.settle(0.002)
         opening = self.controller.set_grip(0.0)
         if opening < MIN_HELD_OPENING:
@@ -435,9 +467,10 @@ class Pick:
             return path
         return self.arm.line(above, position, quat, seed=seed, exact=True) or path
 
-    def _back_off(self, above: np.ndarray, quat: np.ndarray) -> None:
-        """Open the fingers and return above the grasp (then tuck)."""
-        self.controller.set_grip(0.05, seconds=0.3)
+    def _back_off(self, above: np.ndarray, quat: np.ndarray, release: bool = True) -> None:
+        """Open the fingers (with `release`) and return above the grasp (then tuck)."""
+        if release:
+            self.controller.set_grip(0.05, seconds=0.3)
         result = self.arm.solve(above, quat, seeds=False)
         if result.converged:
             self.controller.move_through([result.q])

@@ -150,6 +150,17 @@ def test_fingers_opening_on_the_way_down_from_the_raised_arm_sweep_nothing() -> 
     assert result["collateral"] == 0
 
 
+def test_a_hand_that_pushes_a_neighbour_on_its_way_in_stops_and_backs_off() -> None:
+    """Seed 12345's first start pose of the shampoo on the shower's shelf: the arm trailing its planned descent, a
+    finger pushed the conditioner beside it 1 cm in 0.07 s, and on to 18 cm as the fingers closed. The pick watches
+    the other objects while the hand goes in, stops where one moves WATCH_PUSH, backs off without opening wider, and
+    takes the next grasp."""
+    included, _ = suite_classes()
+    result = run_suite(trials=1, seed=12345, progress=False, classes={"shampoo": included["shampoo"]})
+    assert result["per_class"]["shampoo"]["successes"] == 1, result["per_class"]["shampoo"]["failures"]
+    assert result["collateral"] == 0
+
+
 @pytest.mark.slow
 def test_full_grasp_suite_meets_its_targets() -> None:
     result = run_suite(seed=0, progress=False)
