@@ -55,7 +55,7 @@ TARGET_CLASS = 0.9
 QUICK_SIZE = 6
 KINDS = ("fell out of the hand", "slipped", "no free base pose", "no path", "fell over", "has fallen over",
          "closed on nothing", "rose only", "unreachable", "no free spot", "leaves the arm's reach",
-         "ended")  # what a skill's failure reason says went wrong, for the cause table
+         "ended", "pushed")  # what a skill's failure reason says went wrong, for the cause table
 
 
 @dataclass(frozen=True)
