@@ -141,13 +141,18 @@ def test_window_must_be_a_positive_multiple_of_the_grid() -> None:
         window_steps(0, 10)
 
 
-def test_tuning_for_assistance_picks_the_robots_best_rule_on_validation_days(tmp_path) -> None:
-    write_synthetic_dataset(tmp_path, np.random.default_rng(4), households=1, train_days=8, test_days=1, size="small")
-    dataset = Dataset(tmp_path)
+def _markov_on_validation_days(folder) -> tuple:
+    """A markov predictor fitted on 6 days of a small synthetic household, and queries of its 2 validation days."""
+    write_synthetic_dataset(folder, np.random.default_rng(4), households=1, train_days=8, test_days=1, size="small")
+    dataset = Dataset(folder)
     days = dataset.load("household_a", "train")
     predictor = make_predictor("markov", dataset.meta, progress=False)
     predictor.fit(days[:6], days[6:])
-    queries = day_queries(days[6:], 3)
+    return predictor, day_queries(days[6:], 3)
+
+
+def test_tuning_for_assistance_picks_the_robots_best_rule_on_validation_days(tmp_path) -> None:
+    predictor, queries = _markov_on_validation_days(tmp_path)
     params, best = tune(predictor, queries, 3, target="assist")
     rollout = rollout_queries(predictor, queries, 3)
     every = {(t, k): robot_counts(queries, gate(rollout, queries.observed, t), 3, predictor.movable, k)
@@ -211,12 +216,7 @@ def test_first_steps_is_first_change_for_every_count_of_steps() -> None:
 
 
 def test_a_replay_counts_each_act_steps_as_robot_counts_does(tmp_path) -> None:
-    write_synthetic_dataset(tmp_path, np.random.default_rng(4), households=1, train_days=8, test_days=1, size="small")
-    dataset = Dataset(tmp_path)
-    days = dataset.load("household_a", "train")
-    predictor = make_predictor("markov", dataset.meta, progress=False)
-    predictor.fit(days[:6], days[6:])
-    queries = day_queries(days[6:], 3)
+    predictor, queries = _markov_on_validation_days(tmp_path)
     predicted = gate(rollout_queries(predictor, queries, 3), queries.observed, 0.2)
     replay = RobotReplay(queries, 3, predictor.movable, 0)
     expected = [robot_counts(queries, predicted, 3, predictor.movable, k, 0) for k in (1, 2, 3)]
