@@ -146,10 +146,10 @@ class Analogs(Predictor):
         for b in range(len(parent)):
             probs[:, b] = self.forecast(parent[b], float(minute[b]), steps, None if backoff is None else backoff[:, b])
         observed = parent[:, self.rows]
+        blank = (parent, np.zeros(parent.shape, np.float32))  # static nodes: their parent, with confidence 0
         summaries = []
-        for p in probs:  # static nodes: their parent, with confidence 0 (`_finish` keeps them there)
-            full = [parent.copy(), np.zeros(parent.shape, np.float32), parent.copy(), np.zeros(parent.shape, np.float32)
-                    ]
+        for p in probs:
+            full = [blank[0].copy(), blank[1].copy(), blank[0].copy(), blank[1].copy()]
             for whole, part in zip(full, summarise_step(p, observed), strict=True):
                 whole[:, self.rows] = part
             summaries.append(full)

@@ -273,6 +273,7 @@ class RobotReplay:
 
     def __init__(self, queries: Queries, window_steps: int, movable: np.ndarray, outside: int = -1) -> None:
         self.observed, self.window_steps, self.outside = queries.observed, window_steps, outside
+        self.rows = queries.observed.tolist()  # (Q, N) as lists, for `_replay`'s walk
         self.steps = np.minimum(queries.valid, window_steps)
         true_moved, true_dest = first_change(queries.observed, queries.future, self.steps)
         self.truth = np.where(true_moved, true_dest, -2).tolist()  # (Q, N): the first true move's place, else -2
@@ -317,7 +318,7 @@ class RobotReplay:
         relocations = correct = put_back = 0
         held: dict[int, tuple[int, int]] = {}  # object -> (query it was moved at, where it came from)
         unwanted: dict[int, int] = {}  # object -> where its unused help went back to
-        for i, observed in enumerate(self.observed.tolist()):
+        for i, observed in enumerate(self.rows):
             if self.starts[i]:
                 held, unwanted = {}, {}
             for o, (since, source) in list(held.items()):

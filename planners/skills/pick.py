@@ -83,9 +83,6 @@ class Pick:
         above), so from a table it is then grasped that way first. Standing on the floor, the object is no
         obstacle to the base poses that reach it (`Navigator.exempt`)."""
         self.navigator.exempt = frozenset({self.world.object_index(name)})
-        graph = self.observer.update()
-        watched = np.array([other != name and graph.parent_of(other) != name for other in self.world.object_names])
-        self._watch = (self.world.object_positions(), watched)
         try:
             return self._pick(name, node, into)
         finally:
@@ -102,10 +99,11 @@ class Pick:
             moved &= np.linalg.norm(now - since, axis=1) > PUSH_NOISE
         return [self.world.object_names[i] for i in np.flatnonzero(moved & watched)]
 
-    def _stopped(self, above: np.ndarray | None, quat: np.ndarray) -> SkillResult:
-        """Stop the hand on its way in to a grasp where it pushed something (`_pushed`), then back off: to `above`
-        (the approach point, m) where it was coming down from there, else straight to the tuck posture."""
-        pushed = self._pushed()
+    def _stopped(self, above: np.ndarray | None, quat: np.ndarray, since: np.ndarray) -> SkillResult:
+        """Stop the hand on its way in to a grasp where it pushed something (`_pushed` since the grasp began at
+        `since`), then back off: to `above` (the approach point, m) where it was coming down from there, else
+        straight to the tuck posture."""
+        pushed = self._pushed(since)
         self.controller.stop()
         if above is not None:  # the fingers open no wider: one pressing on what it pushed would push it further
             self._back_off(above, quat, release=False)
@@ -119,6 +117,8 @@ class Pick:
         if reason is not None:
             return SkillResult(False, f"{name}: not graspable ({reason})")
         graph = self.observer.update()
+        watched = np.array([other != name and graph.parent_of(other) != name for other in self.world.object_names])
+        self._watch = (self.world.object_positions(), watched)  # see `_pushed`
         node = node or graph.parent_of(name)
         position, quat = self.world.object_pose(name)
         if self.arm.fallen_over(name):  # from above, as an upright box of the extents it has as it lies
@@ -394,14 +394,14 @@ class Pick:
         pushing = lambda: bool(self._pushed(since))  # noqa: E731
         if not self.arm.reach(path_in[0], grip=grasp.pre_opening, abort=pushing) or (len(path_in) > 1 and not (
                 self.controller.move_through(path_in[1:], grip=grasp.pre_opening, abort=pushing))):
-            return self._stopped(None, quat)
+            return self._stopped(None, quat, since)
         self.controller.settle(0.003)
         down = self._descent(above, grasp.position, quat)
         if down is None:
             return SkillResult(False, "the descent leaves the arm's reach")
         start, _ = self.world.object_pose(name)
         if not self.controller.move_through(down, abort=pushing):
-            return self._stopped(above, quat)
+            return self._stopped(above, quat, since)
         self.controller.settle(0.002)
         opening = self.controller.set_grip(0.0)
         if opening < MIN_HELD_OPENING:
