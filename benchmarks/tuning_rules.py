@@ -15,10 +15,12 @@ to the validation counts and reports what each chosen setting does on the test d
 chosen setting, as a method whose fit does not use the validation days could be. `--cross-validate` (implies
 `--refit`) validates on the training days `model.evaluate.cv_folds` holds out (up to 10) instead of the last 10%,
 each scored by the method fitted on all the other training days, so a rule sees several days even with only 5.
+`--dev-days K` (with `--train-days N`) scores training days N+1 .. N+K in place of the test days: a rule chosen
+there has not seen the days `homer evaluate` reports, which this script's default (the test days) does.
 One JSON object on stdout; `--counts FILE` also keeps every setting's counts (JSON) to try other rules on.
 
-    .venv/bin/python benchmarks/tuning_rules.py --data DATA [--train-days 5] [--method analogs] [--refit]
-        [--cross-validate] [--counts FILE]
+    .venv/bin/python benchmarks/tuning_rules.py --data DATA [--train-days 5 [--dev-days 10]] [--method analogs]
+        [--refit] [--cross-validate] [--counts FILE]
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks._common import emit  # noqa: E402
+from benchmarks._common import emit, positive_int  # noqa: E402
 from homer_sim.data.dataset import Dataset  # noqa: E402
 from model.evaluate import HEADLINE_WINDOW_MIN, FitSpec, cv_folds, household_split, rollout_queries, uses_margin  # noqa: E402
 from model.methods import make_predictor  # noqa: E402
@@ -58,11 +60,17 @@ def _pooled(days: list[Counts]) -> float:
 
 
 def settings(dataset: Dataset, house: str, method: str, train_days: int | None, refit: bool,
-             cross_validate: bool = False) -> list[tuple[list[Counts], Counts]]:
+             cross_validate: bool = False, dev_days: int | None = None) -> list[tuple[list[Counts], Counts]]:
     """(validation counts per validation day, test counts) of every setting of the method's grid; cross_validate:
-    validation on model.evaluate's held-out training days, each held out of its own fit (see --cross-validate)."""
+    validation on model.evaluate's held-out training days, each held out of its own fit (see --cross-validate);
+    dev_days: the training days after the first `train_days` stand in for the test days (see --dev-days)."""
     steps = window_steps(HEADLINE_WINDOW_MIN, dataset.meta.grid_min)
     fit, val, test, _ = household_split(dataset, house, train_days)
+    if dev_days is not None:
+        test = dataset.load(house, "train")[train_days:train_days + dev_days]
+        if len(test) < dev_days:
+            raise SystemExit(f"{house} has {train_days + len(test)} training days; --train-days {train_days} "
+                             f"--dev-days {dev_days} needs {train_days + dev_days}")
     if cross_validate:
         folds = cv_folds(FitSpec(method, tuple(fit), tuple(val)), dataset.meta)
     else:
@@ -96,16 +104,21 @@ def main() -> None:
     parser.add_argument("--method", default="analogs", help="method (analogs)")
     parser.add_argument("--refit", action="store_true", help="score the test days refitted on all training days")
     parser.add_argument("--cross-validate", action="store_true", help="validate on held-out training days")
+    parser.add_argument("--dev-days", type=positive_int, default=None,
+                        help="score the K training days after --train-days instead of the test days")
     parser.add_argument("--counts", type=Path, default=None, help="also write every setting's counts here")
     args = parser.parse_args()
+    if args.dev_days is not None and args.train_days is None:
+        parser.error("--dev-days needs --train-days")
     dataset = Dataset(args.data)
-    per_house = {h: settings(dataset, h, args.method, args.train_days, args.refit, args.cross_validate)
+    per_house = {h: settings(dataset, h, args.method, args.train_days, args.refit, args.cross_validate, args.dev_days)
                  for h in dataset.meta.households}
     if args.counts is not None:
         args.counts.write_text(json.dumps({h: [([asdict(c) for c in val], asdict(test)) for val, test in rows]
                                            for h, rows in per_house.items()}))
     result = {"method": args.method, "train_days": args.train_days, "refit": args.refit or args.cross_validate,
-              "cross_validate": args.cross_validate, "rules": {}}
+              "cross_validate": args.cross_validate, "scored_on": "test" if args.dev_days is None else
+              f"training days {args.train_days + 1}..{args.train_days + args.dev_days}", "rules": {}}
     for name, admissible in RULES.items():
         chosen = {}
         for house, rows in per_house.items():  # the best objective among admissible settings, earliest on ties
