@@ -25,6 +25,7 @@ class TimedMarkov(Predictor):
     """Per-object, time-of-day Markov chain; tunables: kernel width, stay pseudo-count, confidence threshold."""
 
     method = "markov"
+    cross_validated = True
     grid = {"threshold": THRESHOLDS, "sigma_min": (30.0, 10.0, 20.0, 60.0, 120.0),
             "stay_prior": (1.0, 0.25, 4.0)}
 

@@ -5,11 +5,13 @@ Nodes: 0 kitchen (room), 1 table, 2 shelf, 3 cup, 4 book (cup and book movable).
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
 from homer_sim.data.dataset import Dataset, Day
-from model.evaluate import MAX_ROBOT_WRONG_PCT, MIN_ACT_STEPS, rollout_queries, summarise, tune
+from model.evaluate import MAX_ROBOT_WRONG_PCT, MIN_ACT_STEPS, keeps_unused, rollout_queries, summarise, tune
 from model.methods import make_predictor
 from model.metrics import (
     Counts,
@@ -161,6 +163,37 @@ def test_tuning_for_assistance_picks_the_robots_best_rule_on_validation_days(tmp
     chosen = every[params["threshold"], int(params["act_steps"])]
     assert best == chosen.assistance() == max(admissible or [c.assistance() for c in every.values()])
     assert len({c.assistance() for c in every.values()}) > 1  # the rule matters on this data
+
+
+def test_unused_objects_are_kept_in_place_with_a_standard_error_of_margin() -> None:
+    # Two days, 0.6% and 1.0% of 1000 unused moved: pooled 0.8%, standard error 0.2 points -> 1.0%: kept.
+    even = [Counts(unused_correct=994, unused_wrong=6), Counts(unused_correct=990, unused_wrong=10)]
+    assert keeps_unused(even)
+    # 0.2% and 1.4%: the same pooled 0.8%, but a standard error of 0.6 points -> 1.4%: not kept.
+    spread = [Counts(unused_correct=998, unused_wrong=2), Counts(unused_correct=986, unused_wrong=14)]
+    assert not keeps_unused(spread)
+    # One day has no spread: the pooled share alone, here exactly at the 1% limit.
+    assert keeps_unused([Counts(unused_correct=990, unused_wrong=10)])
+    assert not keeps_unused([Counts(unused_correct=989, unused_wrong=11)])
+    assert keeps_unused([Counts(used_correct=3)])  # nothing unused: nothing to move
+
+
+def test_paper_tuning_judges_the_unused_share_per_validation_day(tmp_path) -> None:
+    predictor, _ = _markov_on_validation_days(tmp_path)
+    days = [day_queries([day], 3) for day in Dataset(tmp_path).load("household_a", "train")[6:]]
+    params, best = tune(predictor, [(predictor, day) for day in days], 3)
+    per_setting = {}
+    for values in itertools.product(*(predictor.grid[k] for k in ("sigma_min", "stay_prior"))):
+        predictor.set_params(sigma_min=values[0], stay_prior=values[1])
+        rollouts = [rollout_queries(predictor, day, 3) for day in days]
+        for t in predictor.grid["threshold"]:
+            per_setting[(*values, t)] = [score(day, gate(r, day.observed, t, margin=True), 3, predictor.movable)
+                                         for day, r in zip(days, rollouts, strict=True)]
+    admissible = [sum(c, Counts()).objective() for c in per_setting.values() if keeps_unused(c)]
+    assert best == max(admissible or [sum(c, Counts()).objective() for c in per_setting.values()])
+    assert keeps_unused(per_setting[params["sigma_min"], params["stay_prior"], params["threshold"]]) == bool(admissible)
+    pooled = [sum(c, Counts()) for c in per_setting.values()]
+    assert best < max(c.objective() for c in pooled if c.unused_wrong <= c.unused / 100)  # the margin matters here
 
 
 def test_the_replayed_robot_acts_once_holds_its_help_and_puts_unused_help_back() -> None:

@@ -59,7 +59,9 @@ def test_train_writes_a_checkpoint_and_refuses_to_overwrite(data: Path, tmp_path
     argv = ["train", "--data", str(data), "--household", "household_a", "--method", "markov", "--out", str(out),
             "--quiet", "--json"]
     result = _run(argv, capsys)
-    assert out.is_file() and result["method"] == "markov" and result["fit_days"] == 4 and result["val_days"] == 1
+    # markov is cross-validated: fitted on all 5 training days, each of them held out in turn for tuning
+    assert out.is_file() and result["method"] == "markov" and result["fit_days"] == 5 and result["val_days"] == 0
+    assert result["cross_validation_days"] == 5
     assert set(result["params"]) == {"threshold", "act_steps", "sigma_min", "stay_prior"}
     args = _parser().parse_args(argv)
     with pytest.raises(Exception, match="--overwrite"):
