@@ -129,8 +129,8 @@ def tune_targets(predictor: Predictor, queries: Queries | Sequence[tuple[Predict
                          for margin in {uses_margin(t) for t in targets}}
             params = {**dict(zip(names, values, strict=True)), "threshold": float(threshold)}
             for target, rows in scored.items():
-                for rule, (admissible, value) in _tuning_scores(target, days, predicted[uses_margin(target)], steps,
-                                                                predictor.movable, replay):
+                for rule, (admissible, value) in _tuning_scores(target, queries, days, predicted[uses_margin(target)],
+                                                                steps, predictor.movable, replay):
                     rows.append((admissible, value, -len(rows), params | rule))
     best = {}
     for target, rows in scored.items():
@@ -145,14 +145,15 @@ def uses_margin(target: str) -> bool:
     return target != "f1"
 
 
-def _tuning_scores(target: str, days: Sequence[Queries], predicted: np.ndarray, steps: int, movable: np.ndarray,
-                   replay: RobotReplay | None = None) -> list[tuple[dict[str, float], tuple[bool, float]]]:
+def _tuning_scores(target: str, queries: Queries, days: Sequence[Queries], predicted: np.ndarray, steps: int,
+                   movable: np.ndarray, replay: RobotReplay | None = None
+                   ) -> list[tuple[dict[str, float], tuple[bool, float]]]:
     """[(decision-rule params beside the threshold, (admissible, score))] of one setting's predictions (Q, K, N) on
-    the queries of `days` joined in order; higher is better. "assist" scores each `act_steps` MIN_ACT_STEPS .. steps
-    of the robot's own loop on the queries (`replay`, `model.metrics.robot_counts`): fetches made ahead minus wrong
-    moves, admissible when at most MAX_ROBOT_WRONG_PCT of its relocations are wrong. "paper" is admissible when
-    `keeps_unused` on the per-day counts. The other targets act on the whole window (act_steps 0)."""
-    queries = days[0] if len(days) == 1 else _joined(days)
+    `queries`, the queries of `days` joined in order; higher is better. "assist" scores each `act_steps`
+    MIN_ACT_STEPS .. steps of the robot's own loop on the queries (`replay`, `model.metrics.robot_counts`): fetches
+    made ahead minus wrong moves, admissible when at most MAX_ROBOT_WRONG_PCT of its relocations are wrong. "paper"
+    is admissible when `keeps_unused` on the per-day counts. The other targets act on the whole window (act_steps
+    0)."""
     if target == "assist":
         act = range(min(MIN_ACT_STEPS, steps), steps + 1)
         return [({"act_steps": float(k)}, (counts.wrong <= MAX_ROBOT_WRONG_PCT / 100.0 * counts.relocations,

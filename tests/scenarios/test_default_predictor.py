@@ -14,7 +14,7 @@ from homer_sim.data.dataset import Dataset
 from homer_sim.graph import OUTSIDE
 from model import selection
 from model.evaluate import MAX_ROBOT_WRONG_PCT, MIN_ACT_STEPS, FitSpec, cv_folds, household_split, rollout_queries
-from model.metrics import Queries, day_queries, gate, robot_counts, window_steps
+from model.metrics import day_queries, gate, robot_counts, window_steps
 from model.predictor import ModelError
 from model.selection import best_method, default_method, format_validation, ranking, validation_table
 from model.synthetic import write_synthetic_dataset
@@ -82,11 +82,10 @@ def test_the_robots_predictor_is_the_tables_choice_tuned_for_assistance_on_valid
     # cross-validated: each training day is scored by a chain fitted on the other five.
     fit, val, _, _ = household_split(tiny, house, None)
     steps = window_steps(30, tiny.meta.grid_min)
-    folds = [(fold, day_queries([day], steps)) for fold, day in cv_folds(FitSpec("markov", tuple(fit), tuple(val)),
-                                                                          tiny.meta)]
-    assert len(folds) == 6
-    queries = Queries(*(np.concatenate([getattr(q, name) for _, q in folds])
-                        for name in ("observed", "minute", "future", "valid")))
+    held_out = cv_folds(FitSpec("markov", tuple(fit), tuple(val)), tiny.meta)
+    assert len(held_out) == 6
+    folds = [(fold, day_queries([day], steps)) for fold, day in held_out]
+    queries = day_queries([day for _, day in held_out], steps)
 
     outside = list(tiny.meta.nodes).index(OUTSIDE)
 
