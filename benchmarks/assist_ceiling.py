@@ -5,17 +5,18 @@
 The assisted robot acts on a predictor through a decision rule: a confidence threshold and `act_steps` (how soon a
 predicted move must be due), tuned on validation days. This replays the robot's decisions on the **test** days with
 perfect, instant manipulation (`model.metrics.RobotReplay`: holds, put-backs of unused help, nothing to or from
-outside), for every threshold of the method's grid (and 0.01, 0.05 below it) and every act_steps, twice: with the
-replay's person rule (nothing moved from or to where the person's latest moves were) and with no person rule at all
-(a robot that clears the table while the person eats at it: an upper bound, not a robot to build). It reports each
-rule's share of the person's fetches made ahead (correct relocations over fetches, a fetch being a move of a
-movable object onto a non-room node between two grid snapshots) and its wrong relocations, and the best share among
-rules with at most 10% of their relocations wrong: no manipulation can do better than this with that predictor.
-The physical loop (`homer assist-eval`) counts fetches between snapshots too finely for the grid (about 1.2 times
-as many), so its share is lower still.
+outside), for every threshold of the method's grid (and 0, 0.01, 0.05) and every act_steps (`--full-grid`: for every
+setting of its other tunables too), twice: with the replay's person rule (nothing moved from or to where the
+person's latest moves were) and with no person rule at all (a robot that clears the table while the person eats at
+it: an upper bound, not a robot to build). It reports each rule's share of the person's fetches made ahead (correct
+relocations over fetches, a fetch being a move of a movable object onto a non-room node between two grid snapshots)
+and its wrong relocations, and the best share among rules with at most 10% of their relocations wrong: no
+manipulation can do better than this with that predictor. The physical loop (`homer assist-eval`) counts every move
+of the person onto furniture, about 1.15 times the grid fetches (two moves of one object between snapshots are one
+grid fetch), so its share is lower still.
 
     .venv/bin/python benchmarks/assist_ceiling.py --data DATA [--method NAME] [--window 30] [--households a,b]
-        [--plot FILE.png]
+        [--full-grid] [--plot FILE.png]
 
 Predictors are fitted, tuned and cached as `homer assist-eval` does (DATA/checkpoints). One JSON object on stdout.
 """
@@ -23,6 +24,7 @@ Predictors are fitted, tuned and cached as `homer assist-eval` does (DATA/checkp
 from __future__ import annotations
 
 import argparse
+import itertools
 import logging
 import sys
 from pathlib import Path
@@ -56,7 +58,8 @@ def grid_fetches(days: list[Day], movable: np.ndarray, room: np.ndarray) -> int:
     return total
 
 
-def rule_counts(replay: RobotReplay, rollout, observed: np.ndarray, thresholds, steps: int) -> dict:
+def rule_counts(replay: RobotReplay, rollout, observed: np.ndarray, thresholds, steps: int
+                ) -> dict[tuple[float, int], tuple[int, int]]:
     """{(threshold, act_steps): (relocations, correct)} of the replay for every rule."""
     counts = {}
     for threshold in thresholds:
@@ -72,23 +75,28 @@ def best_share(rows: list[dict], key: str, max_wrong_pct: float) -> dict | None:
     return max(kept, key=lambda r: r[f"{key}_share"], default=None)
 
 
-def best_combination(per_house: list[dict[tuple[float, int], tuple[int, int]]], max_wrong_pct: float
-                     ) -> tuple[int, int]:
+def best_combination(per_house: list[dict[tuple, tuple[int, int]]], max_wrong_pct: float) -> tuple[int, int]:
     """(relocations, correct) of the best choice of one rule per household, chosen with hindsight: the most correct
     relocations in all with at most `max_wrong_pct` of all relocations wrong (exact, by dynamic programming over
-    households on the integer slack correct * p - wrong * (100 - p), p = `max_wrong_pct`, which must be >= 0)."""
+    households on the integer slack correct * p - wrong * (100 - p), p = `max_wrong_pct` rounded, keeping only
+    choices no other beats on both slack and correct)."""
     p = round(max_wrong_pct)
-    best: dict[int, tuple[int, int]] = {0: (0, 0)}  # slack -> (correct, relocations) with the most correct
+    states = [(0, 0, 0)]  # (slack, correct, relocations) of the choices so far that no other dominates
     for counts in per_house:
-        step: dict[int, tuple[int, int]] = {}
-        for slack, (correct, rel) in best.items():
-            for r, c in counts.values():
-                key, value = slack + c * p - (r - c) * (100 - p), (correct + c, rel + r)
-                if value[0] > step.get(key, (-1, 0))[0]:
-                    step[key] = value
-        best = step
-    correct, rel = max((v for k, v in best.items() if k >= 0), default=(0, 0))
+        options = {(c * p - (r - c) * (100 - p), c, r) for r, c in counts.values()}
+        states = _frontier([(s + ds, c + dc, r + dr) for s, c, r in states for ds, dc, dr in _frontier(options)])
+    correct, rel = max(((c, r) for s, c, r in states if s >= 0), default=(0, 0))
     return rel, correct
+
+
+def _frontier(states) -> list[tuple[int, int, int]]:
+    """The (slack, correct, relocations) states that no other has at least as much slack and more correct of."""
+    kept, best = [], -1
+    for state in sorted(states, key=lambda x: (-x[0], -x[1])):
+        if state[1] > best:
+            kept.append(state)
+            best = state[1]
+    return kept
 
 
 def main() -> None:
@@ -97,6 +105,8 @@ def main() -> None:
     parser.add_argument("--method", default=None, help="predictor (default: the best validated one)")
     parser.add_argument("--window", type=int, default=DEFAULT_WINDOW_MIN, help="prediction window, min (30)")
     parser.add_argument("--households", default=None, help="comma-separated subset (default all)")
+    parser.add_argument("--full-grid", action="store_true",
+                        help="also vary the method's other tunables (one rollout per setting of its grid)")
     parser.add_argument("--plot", type=Path, default=None, help="also draw share against wrong % to this PNG")
     args = parser.parse_args()
     setup_logging()
@@ -107,8 +117,8 @@ def main() -> None:
     room = np.asarray(dataset.meta.categories) == "room"
     nodes = list(dataset.meta.nodes)
     outside = nodes.index(OUTSIDE) if OUTSIDE in nodes else -1
-    pooled: dict[tuple[float, int], np.ndarray] = {}
-    fetches, tuned, per_house = 0, {}, {"person_rule": [], "no_person_rule": []}
+    pooled: dict[tuple, np.ndarray] = {}
+    fetches, tuned, per_house, names = 0, {}, {"person_rule": [], "no_person_rule": []}, []
     for house in houses:
         log.info("%s: fit or load %s, replay its test days", house, method)
         fitted = predictor_for(dataset, house, method, args.window, args.data / "checkpoints")
@@ -116,23 +126,32 @@ def main() -> None:
         movable = np.asarray(predictor.movable, dtype=bool)
         test = household_split(dataset, house, None)[2]
         queries = day_queries(test, steps)
-        rollout = rollout_queries(predictor, queries, steps)
         fetches += grid_fetches(test, movable, room)
         with_person = RobotReplay(queries, steps, movable, outside)
         without = RobotReplay(queries, steps, movable, outside)
         without.person_at = [set() for _ in without.person_at]
         thresholds = sorted({*EXTRA_THRESHOLDS, *map(float, predictor.grid.get("threshold", ()))})
-        a = rule_counts(with_person, rollout, queries.observed, thresholds, steps)
-        b = rule_counts(without, rollout, queries.observed, thresholds, steps)
+        names = [k for k in predictor.grid if k != "threshold"]
+        own_values = tuple(float(predictor.params[k]) for k in names)
+        settings = (itertools.product(*(map(float, predictor.grid[k]) for k in names)) if args.full_grid
+                    else [own_values])
+        a, b = {}, {}
+        for values in settings:
+            predictor.set_params(**dict(zip(names, values, strict=True)))
+            rollout = rollout_queries(predictor, queries, steps)
+            for counts, replay in ((a, with_person), (b, without)):
+                for rule, value in rule_counts(replay, rollout, queries.observed, thresholds, steps).items():
+                    counts[(tuple(values), *rule)] = value
         per_house["person_rule"].append(a)
         per_house["no_person_rule"].append(b)
         for rule in a:
             pooled[rule] = pooled.get(rule, np.zeros(4, dtype=np.int64)) + np.array([*a[rule], *b[rule]])
-        own = (float(predictor.params["threshold"]), int(predictor.params.get("act_steps", 0)) or steps)
-        tuned[house] = {"threshold": own[0], "act_steps": own[1], "relocations": a[own][0], "correct": a[own][1]}
+        own = (own_values, float(predictor.params["threshold"]), int(predictor.params.get("act_steps", 0)) or steps)
+        tuned[house] = {**dict(zip(names, own_values, strict=True)), "threshold": own[1], "act_steps": own[2],
+                        "relocations": a[own][0], "correct": a[own][1]}
     rows = []
-    for (threshold, act), (rel, correct, rel_free, correct_free) in sorted(pooled.items()):
-        rows.append({"threshold": threshold, "act_steps": act,
+    for (values, threshold, act), (rel, correct, rel_free, correct_free) in sorted(pooled.items()):
+        rows.append({**dict(zip(names, values, strict=True)), "threshold": threshold, "act_steps": act,
                      "person_rule_share": round(correct / fetches, 4),
                      "person_rule_wrong_pct": round(100.0 * (rel - correct) / rel, 1) if rel else 0.0,
                      "no_person_rule_share": round(correct_free / fetches, 4),
@@ -142,7 +161,7 @@ def main() -> None:
     own_correct = sum(t["correct"] for t in tuned.values())
     result = {
         "benchmark": "assist_ceiling", "data": str(args.data), "method": method, "window_min": args.window,
-        "households": houses, "grid_fetches": fetches, "target_share": TARGET_SHARE,
+        "households": houses, "full_grid": args.full_grid, "grid_fetches": fetches, "target_share": TARGET_SHARE,
         "max_wrong_pct": MAX_ROBOT_WRONG_PCT,
         "tuned": {"share": round(own_correct / fetches, 4),
                   "wrong_pct": round(100.0 * (own_rel - own_correct) / own_rel, 1) if own_rel else 0.0,
