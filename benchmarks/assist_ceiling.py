@@ -37,6 +37,7 @@ sys.path.insert(0, str(REPO_ROOT))
 from benchmarks._common import emit, setup_logging
 from homer_sim.clock import DEFAULT_WINDOW_MIN, GRID_MIN
 from homer_sim.data.dataset import Dataset, Day
+from homer_sim.errors import HomerError
 from homer_sim.graph import OUTSIDE
 from model.evaluate import MAX_ROBOT_WRONG_PCT, household_split, rollout_queries
 from model.metrics import RobotReplay, day_queries, gate, window_steps
@@ -107,7 +108,7 @@ def main() -> None:
     parser.add_argument("--households", default=None, help="comma-separated subset (default all)")
     parser.add_argument("--full-grid", action="store_true",
                         help="also vary the method's other tunables (one rollout per setting of its grid)")
-    parser.add_argument("--plot", type=Path, default=None, help="also draw share against wrong % to this PNG")
+    parser.add_argument("--plot", type=Path, default=None, help="also draw share against wrong %% to this PNG")
     args = parser.parse_args()
     setup_logging()
     dataset = Dataset(args.data)
@@ -204,4 +205,7 @@ def plot(rows: list[dict], result: dict, path: Path) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except HomerError as error:  # a bad dataset, window, household or method: say so, no traceback
+        sys.exit(f"assist_ceiling: {error}")

@@ -28,3 +28,17 @@ def test_the_best_rule_per_household_keeps_all_wrong_relocations_within_the_limi
     assert best_combination([a, b], 10.0) == (40, 38)
     assert best_combination([a, b], 15.0) == (50, 44)
     assert best_combination([a], 0.0) == (0, 0)  # nothing without a wrong one, but doing nothing is allowed
+
+
+def test_the_script_explains_itself_and_refuses_a_folder_that_is_no_dataset(tmp_path) -> None:
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[2] / "benchmarks" / "assist_ceiling.py"
+    shown = subprocess.run([sys.executable, str(script), "--help"], capture_output=True, text=True, check=False)
+    assert shown.returncode == 0 and "--full-grid" in shown.stdout
+    refused = subprocess.run([sys.executable, str(script), "--data", str(tmp_path)], capture_output=True, text=True,
+                             check=False)
+    assert refused.returncode == 1 and "not a homer-sim dataset" in refused.stderr
+    assert "Traceback" not in refused.stderr
