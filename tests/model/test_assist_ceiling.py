@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 
 from benchmarks.assist_ceiling import best_combination, grid_fetches
@@ -31,10 +35,6 @@ def test_the_best_rule_per_household_keeps_all_wrong_relocations_within_the_limi
 
 
 def test_the_script_explains_itself_and_refuses_a_folder_that_is_no_dataset(tmp_path) -> None:
-    import subprocess
-    import sys
-    from pathlib import Path
-
     script = Path(__file__).resolve().parents[2] / "benchmarks" / "assist_ceiling.py"
     shown = subprocess.run([sys.executable, str(script), "--help"], capture_output=True, text=True, check=False)
     assert shown.returncode == 0 and "--full-grid" in shown.stdout
