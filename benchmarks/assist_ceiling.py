@@ -131,7 +131,8 @@ def main() -> None:
         with_person = RobotReplay(queries, steps, movable, outside)
         without = RobotReplay(queries, steps, movable, outside)
         without.person_at = [set() for _ in without.person_at]
-        thresholds = sorted({*EXTRA_THRESHOLDS, *map(float, predictor.grid.get("threshold", ()))})
+        thresholds = sorted({*EXTRA_THRESHOLDS, float(predictor.params["threshold"]),
+                             *map(float, predictor.grid.get("threshold", ()))})
         names = [k for k in predictor.grid if k != "threshold"]
         own_values = tuple(float(predictor.params[k]) for k in names)
         settings = (itertools.product(*(map(float, predictor.grid[k]) for k in names)) if args.full_grid
