@@ -24,6 +24,7 @@ Predictors are fitted, tuned and cached as `homer assist-eval` does (DATA/checkp
 from __future__ import annotations
 
 import argparse
+import copy
 import itertools
 import logging
 import sys
@@ -68,6 +69,11 @@ def rule_counts(replay: RobotReplay, rollout, observed: np.ndarray, thresholds, 
         for act, c in zip(range(1, steps + 1), replay.counts(predicted, range(1, steps + 1)), strict=True):
             counts[(float(threshold), act)] = (c.relocations, c.correct)
     return counts
+
+
+def wrong_pct(relocations: int, correct: int) -> float:
+    """Percentage of `relocations` that are not `correct` (0 for none), to a tenth."""
+    return round(100.0 * (relocations - correct) / relocations, 1) if relocations else 0.0
 
 
 def best_share(rows: list[dict], key: str, max_wrong_pct: float) -> dict | None:
@@ -129,8 +135,8 @@ def main() -> None:
         queries = day_queries(test, steps)
         fetches += grid_fetches(test, movable, room)
         with_person = RobotReplay(queries, steps, movable, outside)
-        without = RobotReplay(queries, steps, movable, outside)
-        without.person_at = [set() for _ in without.person_at]
+        without = copy.copy(with_person)  # the same truth and days, with the person nowhere
+        without.person_at = [set() for _ in with_person.person_at]
         thresholds = sorted({*EXTRA_THRESHOLDS, float(predictor.params["threshold"]),
                              *map(float, predictor.grid.get("threshold", ()))})
         names = [k for k in predictor.grid if k != "threshold"]
@@ -154,11 +160,9 @@ def main() -> None:
     rows = []
     for (values, threshold, act), (rel, correct, rel_free, correct_free) in sorted(pooled.items()):
         rows.append({**dict(zip(names, values, strict=True)), "threshold": threshold, "act_steps": act,
-                     "person_rule_share": round(correct / fetches, 4),
-                     "person_rule_wrong_pct": round(100.0 * (rel - correct) / rel, 1) if rel else 0.0,
+                     "person_rule_share": round(correct / fetches, 4), "person_rule_wrong_pct": wrong_pct(rel, correct),
                      "no_person_rule_share": round(correct_free / fetches, 4),
-                     "no_person_rule_wrong_pct": round(100.0 * (rel_free - correct_free) / rel_free, 1)
-                     if rel_free else 0.0})
+                     "no_person_rule_wrong_pct": wrong_pct(rel_free, correct_free)})
     own_rel = sum(t["relocations"] for t in tuned.values())
     own_correct = sum(t["correct"] for t in tuned.values())
     result = {
@@ -166,7 +170,7 @@ def main() -> None:
         "households": houses, "full_grid": args.full_grid, "grid_fetches": fetches, "target_share": TARGET_SHARE,
         "max_wrong_pct": MAX_ROBOT_WRONG_PCT,
         "tuned": {"share": round(own_correct / fetches, 4),
-                  "wrong_pct": round(100.0 * (own_rel - own_correct) / own_rel, 1) if own_rel else 0.0,
+                  "wrong_pct": wrong_pct(own_rel, own_correct),
                   "per_household": tuned},
         "best_within_wrong": {key: best_share(rows, key, MAX_ROBOT_WRONG_PCT)
                               for key in ("person_rule", "no_person_rule")},
