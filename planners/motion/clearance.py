@@ -68,16 +68,17 @@ class ClearanceCheck:
         FINGER_GRAZE m aside)."""
         return not self.finger_contacts(q)
 
-    def finger_contacts(self, q: np.ndarray, graze: float = FINGER_GRAZE) -> set[int]:
+    def finger_contacts(self, q: np.ndarray, graze: float = FINGER_GRAZE, whole: bool = False) -> set[int]:
         """Ids of the geoms outside the robot that the fingers at configuration q (shape (13,), the finger
-        openings included) touch deeper than `graze` m."""
+        openings included) touch deeper than `graze` m; with `whole`, that any robot geom touches."""
+        mine = self.robot if whole else self.fingers
         d = self.scratch
         d.qpos[:] = self.world.data.qpos
         d.qpos[self.qpos_adr] = q
         mujoco.mj_kinematics(self.model, d)
         mujoco.mj_collision(self.model, d)
         g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
-        touching = ((self.fingers[g1] != self.fingers[g2]) & ~(self.robot[g1] & self.robot[g2])
+        touching = ((mine[g1] != mine[g2]) & ~(self.robot[g1] & self.robot[g2])
                     & (d.contact.dist[: d.ncon] < -graze))
         return {int(g) for g in np.concatenate([g1[touching], g2[touching]]) if not self.robot[g]}
 

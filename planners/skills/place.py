@@ -325,7 +325,8 @@ class Place:
         no longer held (a laundry basket pinched by its rim slipped out as it touched the bed): nothing is backed up,
         the hand opens and draws back and where it ended is read."""
         if self.arm.hand_empty():
-            return self._let_go(name, node, TOP_RELEASE_OPENING, self._retreat(release, quat))
+            return self._let_go(name, node, TOP_RELEASE_OPENING,
+                                self._retreat(name, release, quat, TOP_RELEASE_OPENING))
         index = self.world.object_index(name)
         size = np.asarray(CATALOG[self.world.layout.objects[index].cls].size)
         tilt = np.abs(self.world.data.xmat[self.world.object_body_ids[index]].reshape(3, 3)[2])
@@ -341,7 +342,7 @@ class Place:
             self.arm.grip_line(release + np.array([0.0, 0.0, APPROACH]), quat)
             return SkillResult(False, f"place: {name} came down {missed * 100:.1f} cm beside its spot on {node}")
         opening = max(TOP_RELEASE_OPENING, self._held_opening() + RELEASE_OPENING)
-        return self._let_go(name, node, opening, self._retreat(release, quat))
+        return self._let_go(name, node, opening, self._retreat(name, release, quat, opening))
 
     def _rests_only_on(self, name: str, node: str) -> bool:
         """Whether object `name` touches something besides the robot now, and all of it is `node` or what lies on
@@ -454,19 +455,38 @@ class Place:
         (a cd held across 12.5 cm stays wedged between fingers opened to 5 cm each)."""
         return float(np.mean(self.controller.q()[-2:]))
 
-    def _retreat(self, release: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
-        """Configurations that take the open hand away from an object it let go of at `release` (m): back along
-        the grip x axis APPROACH m (straight up for a hand pointing down), then, for a hand held level, up as
-        much (it held the object's side: lifted at once, or swung back into the tuck, the fingers knock it
-        over). The base stays where it can, else it backs away with the hand (a cup let go 75 cm out over the
-        dining table at 0.8 m was out of the arm's reach drawn back with the base held; the retract then lifted
-        the open fingers round it and swung them across it, and it fell over)."""
+    def _retreat(self, name: str, release: np.ndarray, quat: np.ndarray, opening: float
+                 ) -> list[np.ndarray] | None:
+        """Configurations that take the open hand away from `name`, let go of at `release` (m), the fingers open
+        to `opening` m: back along the grip x axis APPROACH m (straight up for a hand pointing down), then, for a
+        hand held level, up as much (it held the object's side: lifted at once, or swung back into the tuck, the
+        fingers knock it over). The base stays where it can, else it backs away with the hand (a cup let go 75 cm
+        out over the dining table at 0.8 m was out of the arm's reach drawn back with the base held; the retract
+        then lifted the open fingers round it and swung them across it, and it fell over). Where that way, the
+        fingers open, touches anything but `name`, a level hand goes up first, then back, if that way touches
+        nothing (the open pads drawn back from a vegetable let go on a cutting board caught the knife block
+        beside it and dragged it 1 m)."""
         x = self.world.data.site("robot/grip").xmat.reshape(3, 3)[:, 0].copy()
-        back = release - APPROACH * x
+        back, up = release - APPROACH * x, np.array([0.0, 0.0, APPROACH])
         away = self.arm.line(release, back, quat) or self.arm.line(release, back, quat, base_cost=PULL_BASE_COST)
         if away is None or np.linalg.norm(x[:2]) <= LEVEL_HAND:
             return away
-        return away + (self.arm.line(back, back + np.array([0.0, 0.0, APPROACH]), quat, seed=away[-1]) or [])
+        away += self.arm.line(back, back + up, quat, seed=away[-1]) or []
+        if self._open_hand_clear(name, away, opening):
+            return away
+        lift = self.arm.line(release, release + up, quat)
+        over = lift and self.arm.line(release + up, back + up, quat, seed=lift[-1])
+        return lift + over if over and self._open_hand_clear(name, lift + over, opening) else away
+
+    def _open_hand_clear(self, name: str, path: list[np.ndarray], opening: float) -> bool:
+        """Whether the robot, the fingers open to `opening` m, touches nothing but object `name` along `path`."""
+        body = self.world.object_body_ids[self.world.object_index(name)]
+        for q in path:
+            opened = q.copy()
+            opened[self.controller.n_body:] = opening
+            if any(self.world.model.geom_bodyid[g] != body for g in self.clearance.finger_contacts(opened, whole=True)):
+                return False
+        return True
 
     def _let_go(self, name: str, node: str, opening: float, away: list[np.ndarray] | None,
                 inside: bool = False) -> SkillResult:
