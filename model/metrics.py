@@ -223,6 +223,10 @@ class RobotCounts:
         """Fetches made ahead minus wrong moves (put-backs of unused help included)."""
         return self.correct - self.wrong
 
+    def __add__(self, other: RobotCounts) -> RobotCounts:
+        return RobotCounts(self.relocations + other.relocations, self.correct + other.correct,
+                           self.put_back + other.put_back)
+
 
 def roots(parent: np.ndarray) -> np.ndarray:
     """The root (room, or `outside`) above each node of parent arrays of Shape (..., N) (roots have parent -1)."""
@@ -296,6 +300,11 @@ class RobotReplay:
 
     def counts(self, predicted: np.ndarray, act_steps: Sequence[int]) -> list[RobotCounts]:
         """RobotCounts of `predicted` (Shape (Q, K', N) parents) for each of `act_steps`."""
+        return [sum(days, RobotCounts()) for days in self.day_counts(predicted, act_steps)]
+
+    def day_counts(self, predicted: np.ndarray, act_steps: Sequence[int]) -> list[list[RobotCounts]]:
+        """RobotCounts of `predicted` (Shape (Q, K', N) parents) for each of `act_steps`, one per day of the
+        queries, in order."""
         first, destination = first_steps(self.observed, predicted)
         allowed = np.broadcast_to(self.movable[None], first.shape)
         if self.root is not None:
@@ -307,19 +316,23 @@ class RobotReplay:
             results.append(self._replay(moved & allowed, destination))
         return results
 
-    def _replay(self, pred_moved: np.ndarray, pred_dest: np.ndarray) -> RobotCounts:
+    def _replay(self, pred_moved: np.ndarray, pred_dest: np.ndarray) -> list[RobotCounts]:
         """The robot's decisions over the queries in order (see `robot_counts`): it acts on the objects of
-        pred_moved (Q, N) bool, each to its place in pred_dest (Q, N)."""
+        pred_moved (Q, N) bool, each to its place in pred_dest (Q, N); the counts of each day."""
         window_steps, person_at = self.window_steps, self.person_at
         queried, objects = np.nonzero(pred_moved)  # row-major: by query, then object
         places = pred_dest[queried, objects].tolist()
         bounds = np.searchsorted(queried, np.arange(len(pred_moved) + 1)).tolist()
         objects = objects.tolist()
+        days: list[RobotCounts] = []
         relocations = correct = put_back = 0
         held: dict[int, tuple[int, int]] = {}  # object -> (query it was moved at, where it came from)
         unwanted: dict[int, int] = {}  # object -> where its unused help went back to
         for i, observed in enumerate(self.rows):
             if self.starts[i]:
+                if i:
+                    days.append(RobotCounts(relocations, int(correct), put_back))
+                relocations = correct = put_back = 0
                 held, unwanted = {}, {}
             for o, (since, source) in list(held.items()):
                 if observed[o] != source:  # the person moved it: the hold ends
@@ -339,4 +352,4 @@ class RobotReplay:
                 relocations += 1
                 correct += truth[o] == place
                 held[o] = (i, observed[o])
-        return RobotCounts(relocations, int(correct), put_back)
+        return days + [RobotCounts(relocations, int(correct), put_back)]

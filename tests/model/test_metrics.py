@@ -11,11 +11,20 @@ import numpy as np
 import pytest
 
 from homer_sim.data.dataset import Dataset, Day
-from model.evaluate import MAX_ROBOT_WRONG_PCT, MIN_ACT_STEPS, keeps_unused, rollout_queries, summarise, tune
+from model.evaluate import (
+    MAX_ROBOT_WRONG_PCT,
+    MIN_ACT_STEPS,
+    keeps_unused,
+    rollout_queries,
+    summarise,
+    tune,
+    within_margin,
+)
 from model.methods import make_predictor
 from model.metrics import (
     Counts,
     Queries,
+    RobotCounts,
     RobotReplay,
     day_queries,
     first_change,
@@ -157,12 +166,27 @@ def test_tuning_for_assistance_picks_the_robots_best_rule_on_validation_days(tmp
     predictor, queries = _markov_on_validation_days(tmp_path)
     params, best = tune(predictor, queries, 3, target="assist")
     rollout = rollout_queries(predictor, queries, 3)
-    every = {(t, k): robot_counts(queries, gate(rollout, queries.observed, t), 3, predictor.movable, k)
+    replay = RobotReplay(queries, 3, predictor.movable)
+    every = {(t, k): replay.day_counts(gate(rollout, queries.observed, t), [k])[0]
              for t in predictor.grid["threshold"] for k in range(MIN_ACT_STEPS, 4)}
-    admissible = [c.assistance() for c in every.values() if c.wrong <= MAX_ROBOT_WRONG_PCT / 100 * c.relocations]
-    chosen = every[params["threshold"], int(params["act_steps"])]
-    assert best == chosen.assistance() == max(admissible or [c.assistance() for c in every.values()])
-    assert len({c.assistance() for c in every.values()}) > 1  # the rule matters on this data
+    assert all(len(days) == 2 for days in every.values())  # the two validation days, each judged on its own
+    admissible = [sum(days, RobotCounts()).assistance() for days in every.values()
+                  if within_margin([(c.wrong, c.relocations) for c in days], MAX_ROBOT_WRONG_PCT)]
+    chosen = sum(every[params["threshold"], int(params["act_steps"])], RobotCounts())
+    everything = [sum(days, RobotCounts()).assistance() for days in every.values()]
+    assert best == chosen.assistance() == max(admissible or everything)
+    assert len(set(everything)) > 1  # the rule matters on this data
+
+
+def test_the_robots_wrong_share_is_judged_with_a_standard_error_of_margin() -> None:
+    # Wrong 8 of 100 and 12 of 100: pooled 10%, standard error 2 points -> 12%: over the 10% limit.
+    assert not within_margin([(8, 100), (12, 100)], MAX_ROBOT_WRONG_PCT)
+    # 9 and 10 of 100 (pooled 9.5%, standard error 0.5): 10%, within it; one day alone has no margin.
+    assert within_margin([(9, 100), (10, 100)], MAX_ROBOT_WRONG_PCT)
+    assert within_margin([(10, 100)], MAX_ROBOT_WRONG_PCT) and not within_margin([(11, 100)], MAX_ROBOT_WRONG_PCT)
+    # A day without relocations has no share: left out of the spread, and nothing at all is within any limit.
+    assert within_margin([(9, 100), (10, 100), (0, 0)], MAX_ROBOT_WRONG_PCT)
+    assert within_margin([(0, 0), (0, 0)], 0.0)
 
 
 def test_unused_objects_are_kept_in_place_with_a_standard_error_of_margin() -> None:
@@ -255,3 +279,10 @@ def test_a_replay_counts_each_act_steps_as_robot_counts_does(tmp_path) -> None:
     expected = [robot_counts(queries, predicted, 3, predictor.movable, k, 0) for k in (1, 2, 3)]
     assert replay.counts(predicted, (1, 2, 3)) == expected
     assert len(set(expected)) > 1
+    per_day = replay.day_counts(predicted, (1, 2, 3))
+    assert [sum(days, type(expected[0])()) for days in per_day] == expected
+    one_day = [day_queries([day], 3) for day in Dataset(tmp_path).load("household_a", "train")[6:]]
+    ends = np.cumsum([len(q) for q in one_day])  # each day replayed alone gives its own counts
+    alone = [RobotReplay(q, 3, predictor.movable, 0).counts(predicted[end - len(q):end], (2,))[0]
+             for q, end in zip(one_day, ends, strict=True)]
+    assert per_day[1] == alone and len(set(alone)) > 1
