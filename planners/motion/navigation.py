@@ -443,10 +443,12 @@ def _carry_poses(points: list[tuple[float, float]], yaw0: float, goal: tuple[flo
     headings = []
     for heading, along in zip(ahead, done, strict=True):
         yaw = heading
-        if not (last and last[1]) and total - along < CARRY_TURN:
-            yaw = goal[2] + _wrap(heading - goal[2]) * (total - along) / CARRY_TURN
         if not (first and first[1]) and along < CARRY_TURN:
             yaw = yaw0 + _wrap(yaw - yaw0) * along / CARRY_TURN
+        if not (last and last[1]) and total - along < CARRY_TURN:  # after the start's blend: the goal heading
+            # is reached on a way shorter than CARRY_TURN too (blended back towards the start's, a base stopped
+            # 6 degrees off the heading a lowering was planned at, and the vegetable lowered pushed a loaf 5.8 cm)
+            yaw = goal[2] + _wrap(yaw - goal[2]) * (total - along) / CARRY_TURN
         headings.append(yaw)
     poses = [(*pts[0], yaw0)] if first else []  # backed out (then turned on the spot where that is clear)
     poses += [(*p, yaw) for p, yaw in zip(pts, headings, strict=True)][0 if first else 1:]

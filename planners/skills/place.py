@@ -651,8 +651,7 @@ class Place:
             except NavigationError:
                 continue
             path = [start.q, *path]
-            for q_in in [*ease, *path]:
-                q_in[:3] = self.controller.target[:3]  # where the base really stopped
+            self.arm.from_stop([*ease, *path], base)
             return ease, path
         return None
 

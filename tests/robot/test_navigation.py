@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from homer_sim.world import World
-from planners.motion.navigation import IN_THE_WAY, NavigationError
+from planners.motion.navigation import IN_THE_WAY, NavigationError, _carry_poses
 from planners.robot import add_robot
 from planners.skills import Robot
 
@@ -80,3 +80,16 @@ def test_an_object_set_down_in_a_doorway_would_shut_the_way(robot: Robot) -> Non
     navigator = robot.navigator
     assert not navigator.leaves_way((1.96, 3.95, 2.51, 4.47))
     assert navigator.leaves_way((3.6, 3.0, 4.0, 3.4))
+
+
+@pytest.mark.parametrize("length", [0.3, 0.45, 0.9, 2.0])
+def test_a_carry_ends_at_the_goal_heading_however_short_the_way(length: float) -> None:
+    """`_carry_poses` blends the heading from the start's over the first CARRY_TURN m and into the goal's over the
+    last: on a way shorter than CARRY_TURN the start's blend came last and the base stopped short of the goal's
+    heading (6 degrees off the pose a lowering was planned at, which then pushed a loaf)."""
+    points = [(0.0, 0.0), *((x, 0.0) for x in np.linspace(0.15, length, 4))]
+    goal = (length, 0.0, -1.0)
+    for first in (None, ((0.0, 0.0), False)):
+        poses = _carry_poses(points, 0.5, goal, first, None)
+        assert poses[-1][:2] == pytest.approx(goal[:2]) and poses[-1][2] == pytest.approx(goal[2])
+        assert all(abs(b[2] - a[2]) < np.pi for a, b in zip(poses, poses[1:]))  # no turn the long way
