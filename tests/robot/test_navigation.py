@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -92,4 +94,4 @@ def test_a_carry_ends_at_the_goal_heading_however_short_the_way(length: float) -
     for first in (None, ((0.0, 0.0), False)):
         poses = _carry_poses(points, 0.5, goal, first, None)
         assert poses[-1][:2] == pytest.approx(goal[:2]) and poses[-1][2] == pytest.approx(goal[2])
-        assert all(abs(b[2] - a[2]) < np.pi for a, b in zip(poses, poses[1:]))  # no turn the long way
+        assert all(abs(b[2] - a[2]) < np.pi for a, b in itertools.pairwise(poses))  # no turn the long way
