@@ -286,19 +286,10 @@ class Arm:
             self.retract()
             self.navigator.drive_to(base, self.tucked(), **FREE_MOTION)
             path_in = [*lead, *path]
-            self.from_stop(path_in, base)
+            for q_in in path_in:
+                q_in[:3] = self.controller.target[:3]  # where the base really stopped
             return path_in, lift
         return None
-
-    def from_stop(self, configurations: list[np.ndarray], planned: tuple[float, float, float]) -> None:
-        """Shift the base of each of `configurations` (in place) by how far from `planned` (x m, y m, yaw rad)
-        the base stopped, so that the configurations run are those checked: each one's base overwritten with
-        where it stopped, those solved with the base free to follow the hand (an approach's start, an ease's
-        lead) ran with the arm's joints at another base pose than they were checked at."""
-        shift = self.controller.target[:3] - np.asarray(planned, dtype=float)
-        shift[2] = math.remainder(float(shift[2]), 2.0 * math.pi)
-        for q in {id(q): q for q in configurations}.values():
-            q[:3] += shift
 
     def _lift_clear(self, q: np.ndarray, above: np.ndarray, grasp: Grasp, lift: float, held: Held | None) -> bool:
         """Whether the arm, from configuration q (shape (13,)) at the approach point `above` (m), comes down onto

@@ -651,7 +651,8 @@ class Place:
             except NavigationError:
                 continue
             path = [start.q, *path]
-            self.arm.from_stop([*ease, *path], base)
+            for q_in in [*ease, *path]:
+                q_in[:3] = self.controller.target[:3]  # where the base really stopped
             return ease, path
         return None
 
