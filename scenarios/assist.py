@@ -20,6 +20,7 @@ import numpy as np
 
 from homer_sim.errors import PhysicsError
 from homer_sim.graph import ON, SceneGraph
+from homer_sim.home.validate import blocked_when_open
 from homer_sim.person.executor import DayLog, Executor
 from homer_sim.world import World
 from planners.motion.control import FREE_MOTION
@@ -91,6 +92,7 @@ class Helper:
         self.recording = recording
         self.robot = Robot(world, rng)
         self.containers = containers_of(world)
+        self.blocked = blocked_when_open(world.layout)  # container -> furniture its open doors stand in front of
         self.log = AssistLog()
         self.waiting: list[Relocation] = []  # relocations the person stood in the way of, for the next snapshot
         self._placed_at: dict[str, np.ndarray] = {}  # where this turn's done relocations left their objects (m)
@@ -113,7 +115,8 @@ class Helper:
         relocations, self.waiting = [*still, *relocations], []
         if not relocations:
             return float(minute)
-        steps = self._needed(plan_steps(graph, movable, relocations, self.containers, self.open_containers()),
+        steps = self._needed(plan_steps(graph, movable, relocations, self.containers, self.open_containers(),
+                                        self.blocked),
                              relocations, graph, movable)
         before = self.world.object_positions()
         started, first = float(self.world.data.time), len(self.log.relocations)
@@ -229,7 +232,7 @@ class Helper:
         if not picked.get(step.obj, SkillResult(False)).success:
             return None
         if step.action == "set_down":
-            result = self.robot.set_down(self.containers)
+            result = self.robot.set_down({*self.containers, *(f for fs in self.blocked.values() for f in fs)})
             if not result.success and self.robot.held == step.obj:
                 self._put_down(step.obj, by_obj[step.obj].source)
             return result

@@ -209,7 +209,8 @@ def unplaceable(graph: SceneGraph, destination: str) -> str | None:
 
 
 def plan_steps(graph: SceneGraph, movable: np.ndarray, relocations: Sequence[Relocation],
-               containers: Mapping[str, Sequence[str]], already_open: Collection[str] = ()) -> tuple[PlanStep, ...]:
+               containers: Mapping[str, Sequence[str]], already_open: Collection[str] = (),
+               blocked: Mapping[str, Collection[str]] | None = None) -> tuple[PlanStep, ...]:
     """The robot steps that make `relocations` in the order given: pick at the object's furniture, place on the
     destination.
 
@@ -218,8 +219,10 @@ def plan_steps(graph: SceneGraph, movable: np.ndarray, relocations: Sequence[Rel
     the plan opened: those in `already_open` stay as the person left them). A relocation from one container into
     another that is still closed has one open at a time: picked, set down, the containers the plan opened closed,
     the destination opened, picked again and placed (two open doors can leave no way between them, and a full
-    hand opens nothing).
+    hand opens nothing). So has a relocation onto furniture that a container the plan opened stands in front of
+    when open (`blocked`: container -> such furniture, see `homer_sim.home.validate.blocked_when_open`).
     """
+    blocked = blocked or {}
     movable = np.asarray(movable, dtype=bool)
 
     def used_containers(r: Relocation) -> list[str]:
@@ -229,20 +232,21 @@ def plan_steps(graph: SceneGraph, movable: np.ndarray, relocations: Sequence[Rel
     steps: list[PlanStep] = []
     opened: list[str] = []
     for k, r in enumerate(relocations):
+        source_anchor = anchor_of(graph, movable, r.source)
         shut = r.destination not in opened and r.destination not in already_open
-        one_at_a_time = len(used_containers(r)) == 2 and shut
-        for container in used_containers(r)[:1] if one_at_a_time else used_containers(r):
-            if container not in opened and container not in already_open:
+        in_front = any(r.destination in blocked.get(c, ()) for c in {*opened, *used_containers(r)} - {*already_open})
+        one_at_a_time = (len(used_containers(r)) == 2 and shut) or in_front
+        for container in [source_anchor] if one_at_a_time else used_containers(r):
+            if container in containers and container not in opened and container not in already_open:
                 steps += [PlanStep("open", part, container) for part in containers[container]]
                 opened.append(container)
-        source_anchor = anchor_of(graph, movable, r.source)
         steps.append(PlanStep("pick", r.obj, source_anchor, r.obj))
         if one_at_a_time:
             steps.append(PlanStep("set_down", r.obj, "", r.obj))
             for container in opened[::-1]:
                 steps += [PlanStep("close", part, container) for part in containers[container]][::-1]
-            opened = [r.destination]
-            steps += [PlanStep("open", part, r.destination) for part in containers[r.destination]]
+            opened = [r.destination] if r.destination in containers else []
+            steps += [PlanStep("open", part, r.destination) for part in containers.get(r.destination, ())]
             steps.append(PlanStep("pick", r.obj, "", r.obj))
         steps.append(PlanStep("place", r.destination, r.destination, r.obj))
         later = {c for rest in relocations[k + 1 :] for c in used_containers(rest)}

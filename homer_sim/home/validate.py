@@ -15,13 +15,15 @@ from homer_sim.errors import LayoutError
 from homer_sim.graph import CATEGORIES, INSIDE, ON
 from homer_sim.home.catalog import CATALOG
 from homer_sim.home.floorplan import FloorPlan, floor_plan
-from homer_sim.home.furniture import KINDS, Furniture, Place, footprint, furniture_geometry, local_to_world
+from homer_sim.home.furniture import KINDS, Furniture, Part, Place, footprint, furniture_geometry, local_to_world
 from homer_sim.home.layout import FACING_YAW, Layout
 from homer_sim.home.placement import base_height, place_world, start_poses
 from homer_sim.robot_spec import ROBOT, RobotSpec
 
 BASE_DISTANCES = np.arange(0.35, 1.21, 0.05)  # m from the access edge to the base centre
 BASE_OFFSETS = np.arange(-0.6, 0.61, 0.1)  # m along the access edge
+FRONT_DEPTH = 0.5  # m in front of furniture where the robot's arm and what it holds pass to put things on it
+BLOCKED_COVER = 0.5  # share of a front's width an open door or drawer must cover to stand in its way
 
 
 def validate_layout(layout: Layout, robot: RobotSpec = ROBOT) -> None:
@@ -125,16 +127,56 @@ def _open_obstacles(layout: Layout, f: Furniture, place: Place) -> list[tuple]:
         if not needed:
             continue
         pts = np.array([b.center for b in part.boxes] + [part.handle.center])
-        if part.joint == "hinge":
-            angle = part.range[1] * (1 if part.axis[2] > 0 else -1)
-            c, s = math.cos(angle), math.sin(angle)
-            pts = np.stack([c * pts[:, 0] - s * pts[:, 1], s * pts[:, 0] + c * pts[:, 1], pts[:, 2]], axis=1)
-        else:
-            pts = pts + np.array(part.axis) * part.range[1]
-        world = local_to_world(f, pts + np.array(part.anchor), z0)
+        world = _opened(f, part, pts, z0)
         rects.append((world[:, 0].min() - 0.03, world[:, 1].min() - 0.03, world[:, 0].max() + 0.03,
                       world[:, 1].max() + 0.03))
     return rects
+
+
+def _opened(f: Furniture, part: Part, pts: np.ndarray, base_z: float = 0.0) -> np.ndarray:
+    """Points of `part` (its frame, shape (N, 3)) in the world with the part wide open (m)."""
+    if part.joint == "hinge":
+        angle = part.range[1] * (1 if part.axis[2] > 0 else -1)
+        c, s = math.cos(angle), math.sin(angle)
+        pts = np.stack([c * pts[:, 0] - s * pts[:, 1], s * pts[:, 0] + c * pts[:, 1], pts[:, 2]], axis=1)
+    else:
+        pts = pts + np.array(part.axis) * part.range[1]
+    return local_to_world(f, pts + np.array(part.anchor), base_z)
+
+
+def blocked_when_open(layout: Layout) -> dict[str, frozenset[str]]:
+    """Furniture with doors or drawers -> the other furniture whose front they cover when wide open: the open
+    door's or drawer's outline crosses the FRONT_DEPTH m in front of an access side over at least BLOCKED_COVER of
+    that side's width (a bathroom cabinet's door swung open stands across the counter beside it; nothing held
+    reaches over it). Doors that open beside a neighbour's edge cover little of it and block nothing."""
+    blocked: dict[str, frozenset[str]] = {}
+    for f in layout.furniture:
+        parts = furniture_geometry(f).parts
+        if not parts:
+            continue
+        outline = []
+        for part in parts:
+            box = part.boxes[0]  # the door leaf or the drawer front
+            along = np.linspace(-1.0, 1.0, 21)
+            pts = np.array([[box.center[0] + sx * box.half[0], box.center[1] + sy * box.half[1], 0.0]
+                            for sx in (-1.0, 1.0) for sy in along])
+            outline.append(_opened(f, part, pts)[:, :2])
+        points = np.concatenate(outline)
+        covered = set()
+        for g in layout.furniture:
+            if g is f:
+                continue
+            c, s = math.cos(g.yaw), math.sin(g.yaw)
+            rel = points - np.asarray(g.pos[:2])
+            local = np.stack([c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1]], axis=1)
+            for normal, half_depth, half_width in access_sides(g):
+                out, across = local @ normal, local @ np.array([-normal[1], normal[0]])
+                front = (out >= half_depth) & (out <= half_depth + FRONT_DEPTH) & (np.abs(across) <= half_width)
+                if front.any() and np.ptp(across[front]) >= BLOCKED_COVER * 2 * half_width:
+                    covered.add(g.name)
+        if covered:
+            blocked[f.name] = frozenset(covered)
+    return blocked
 
 
 def _check_swings(layout: Layout, plan: FloorPlan, f: Furniture) -> None:

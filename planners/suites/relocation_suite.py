@@ -42,6 +42,7 @@ from homer_sim.execution import IN_PROCESS, Backend
 from homer_sim.graph import OUTSIDE
 from homer_sim.home.apartment import default_layout
 from homer_sim.home.catalog import CATALOG
+from homer_sim.home.validate import blocked_when_open
 from planners.suites.collateral import collateral_reason, displaced
 from planners.suites.grasp_suite import stable_hash
 
@@ -158,6 +159,7 @@ class Bench:
         self.containers: dict[str, list[str]] = {}
         for art in self.world.articulations.values():
             self.containers.setdefault(art.furniture, []).append(art.name)
+        self.blocked = blocked_when_open(self.world.layout)
 
     def day(self, occurrence: Occurrence) -> Day:
         from homer_sim.data.dataset import day_path, read_day
@@ -227,13 +229,15 @@ def _stop_after(index: int, last: int) -> None:
         raise _Stop
 
 
-def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, destination: str) -> str | None:
+def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, destination: str,
+             blocked: dict[str, frozenset[str]] | None = None) -> str | None:
     """Open what closes over `source` and what `destination` is used behind (`parts_to_place`), pick `obj`, place
     it, close what was opened; None when every skill succeeded, else the first failure's reason prefixed with its
     skill. Where both close (two pieces of furniture with doors or drawers), one is open at a time: two open doors
     can leave no way between them (a cupboard's and the dishwasher's across the kitchen), and a full hand opens
     and closes nothing; so the object is set down on the nearest open top (`Robot.set_down`) while the source
-    closes and the destination opens."""
+    closes and the destination opens. So it is where the source's open doors stand in front of the destination
+    (`blocked`: furniture -> what its open doors block, `blocked_when_open`); the set-down avoids such tops."""
     from planners.skills.parts import parts_to_open, parts_to_place
 
     graph = robot.observer.update()
@@ -242,7 +246,8 @@ def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, des
     first = parts_to_open(robot.world, graph, containers.get(anchor, []), obj)
     second = [p for p in parts_to_place(robot.world, robot.spots, containers.get(destination, []), destination)
               if p not in first]
-    both = bool(first and second)
+    blocked = blocked or {}
+    both = bool(first and (second or destination in blocked.get(anchor, ())))
     failure = _open(robot, first if both else first + second)
     if failure is not None:
         return failure
@@ -250,7 +255,7 @@ def relocate(robot, containers: dict[str, list[str]], obj: str, source: str, des
     if not result.success:
         return f"pick: {result.reason}"
     if both:
-        result = robot.set_down(containers)
+        result = robot.set_down({*containers, *(f for fs in blocked.values() for f in fs)})
         failure = None if result.success else result.reason
         failure = failure or _close(robot, first) or _open(robot, second)
         if failure is not None:
@@ -303,7 +308,8 @@ def run_triple(bench: Bench, occurrence: Occurrence, cls: str, rng: np.random.Ge
     robot = Robot(bench.world, rng)
     before = bench.world.object_positions()
     try:
-        failure = relocate(robot, bench.containers, occurrence.obj, occurrence.source, occurrence.destination)
+        failure = relocate(robot, bench.containers, occurrence.obj, occurrence.source, occurrence.destination,
+                           bench.blocked)
     except Exception as error:  # a bug in a skill is this triple's failure, not the suite's end
         log.exception("%s", occurrence.triple)
         failure = f"error: {type(error).__name__} {error}"

@@ -6,7 +6,7 @@ import numpy as np
 
 from homer_sim.graph import INSIDE, ON, SceneGraph
 from model.predictor import Rollout
-from scenarios.psi import Holds, PlanStep, psi, unused_help
+from scenarios.psi import Holds, PlanStep, Relocation, plan_steps, psi, unused_help
 
 NODES = ("kitchen", "cupboard", "fridge", "table", "sink", "bowl", "cereal", "milk", "spoon", "tray")
 CATEGORIES = ("room", "furniture", "appliance", "furniture", "furniture", "object", "object", "object", "object",
@@ -100,6 +100,32 @@ def test_carried_excluded_and_unplaceable_moves_are_skipped_with_reasons() -> No
     assert reasons["bowl"] == "in the person's hand" and reasons["cereal"] == "too flat"
     assert "destination bowl is a object" in reasons["spoon"]
     assert all(s.obj == "milk" for s in plan.steps if s.action in ("pick", "place"))
+
+
+def test_an_open_door_standing_in_front_of_the_destination_is_closed_before_the_place() -> None:
+    graph = _graph()
+    moves = [Relocation("milk", "fridge", "table", 1, 0.9), Relocation("bowl", "cupboard", "table", 1, 0.9)]
+
+    def steps(**kw):
+        return [(s.action, s.target) for s in plan_steps(graph, MOVABLE, moves[:1], CONTAINERS, **kw)]
+
+    assert steps() == [("open", "fridge/door"), ("pick", "milk"), ("place", "table"), ("close", "fridge/door")]
+    assert steps(blocked={"fridge": {"table"}}) == [
+        ("open", "fridge/door"), ("pick", "milk"), ("set_down", "milk"), ("close", "fridge/door"), ("pick", "milk"),
+        ("place", "table")]
+    assert steps(blocked={"fridge": {"sink"}}) == steps()
+    assert steps(blocked={"fridge": {"table"}}, already_open={"fridge"}) == [("pick", "milk"), ("place", "table")]
+    # The cupboard, kept open between two moves out of it, is closed for the place on the table, opened again after.
+    moves = [Relocation("bowl", "cupboard", "sink", 1, 0.9), Relocation("milk", "fridge", "table", 1, 0.9),
+             Relocation("cereal", "cupboard", "sink", 1, 0.9)]
+    actions = [(s.action, s.target) for s in plan_steps(graph, MOVABLE, moves, CONTAINERS,
+                                                        blocked={"cupboard": {"table"}})]
+    assert actions == [
+        ("open", "cupboard/left"), ("open", "cupboard/right"), ("pick", "bowl"), ("place", "sink"),
+        ("open", "fridge/door"), ("pick", "milk"), ("set_down", "milk"), ("close", "fridge/door"),
+        ("close", "cupboard/right"), ("close", "cupboard/left"), ("pick", "milk"), ("place", "table"),
+        ("open", "cupboard/left"), ("open", "cupboard/right"), ("pick", "cereal"), ("place", "sink"),
+        ("close", "cupboard/right"), ("close", "cupboard/left")]
 
 
 def test_from_one_container_into_another_one_is_open_at_a_time() -> None:

@@ -11,7 +11,7 @@ from homer_sim.graph import INSIDE, ON
 from homer_sim.home.apartment import default_layout
 from homer_sim.home.floorplan import floor_plan
 from homer_sim.home.layout import Layout, ObjectDecl, Wall
-from homer_sim.home.validate import validate_layout
+from homer_sim.home.validate import blocked_when_open, validate_layout
 from homer_sim.robot_spec import ROBOT
 
 
@@ -137,3 +137,16 @@ def test_neighbours_reached_from_the_front_leave_a_finger_between_them() -> None
                     assert max(b[0] - a[1], a[0] - b[1]) >= gap - 1e-6, (f.name, level)
             checked += gap >= ROW_GAP - 1e-9
     assert checked >= 3  # the fridge's, the bathroom cabinet's shelves have room for a finger
+
+
+def test_an_open_door_blocks_the_furniture_it_stands_in_front_of() -> None:
+    layout = default_layout()
+    blocked = blocked_when_open(layout)
+    # The bathroom cabinet's door, hinged at the end towards the counter, swings open across the counter's front.
+    assert "bathroom_counter" in blocked["bathroom_cabinet"]
+    assert all(f not in furniture for f, furniture in blocked.items())
+    assert "cupboard" not in blocked  # its door opens beside the counter's edge: the counter stays free
+    # Hinged at the other end, the same door swings away from the counter.
+    turned = tuple(replace(f, params={**f.params, "hinge": "right"}) if f.name == "bathroom_cabinet" else f
+                   for f in layout.furniture)
+    assert "bathroom_cabinet" not in blocked_when_open(replace(layout, furniture=turned))
