@@ -580,15 +580,21 @@ class Place:
         up `over` m where it went in higher than SIDE_LIFT (over what stands in front; None if it cannot rise), else
         a hand pointing down first rises SIDE_LIFT m, as it came in, and goes out at that height (drawn out level at
         once, its fingertips, still beside the object, dragged a pair of socks back out of the washing machine's
-        drum)."""
+        drum). Each line keeps the base where it stands if the arm alone reaches it, else the base backs away
+        with the hand (a hand that let a wine glass go on a cupboard's upper shelf was too close to the base to be
+        drawn back by the arm alone; the tuck from in there swept the glass out onto the floor)."""
+        def line(start: np.ndarray, end: np.ndarray, seed: np.ndarray | None = None) -> list[np.ndarray] | None:
+            return (self.arm.line(start, end, quat, loose_end=True, seed=seed)
+                    or self.arm.line(start, end, quat, base_cost=PULL_BASE_COST, loose_end=True, seed=seed))
+
         x = self.world.data.site("robot/grip").xmat.reshape(3, 3)[:, 0]
         if over <= SIDE_LIFT and np.linalg.norm(x[:2]) > PITCHED_HAND:
-            return self.arm.line(release, outside, quat, steps=4, loose_end=True)
+            return line(release, outside)
         lift = np.array([0.0, 0.0, max(over, SIDE_LIFT)])
-        up = self.arm.line(release, release + lift, quat, loose_end=True)
+        up = line(release, release + lift)
         if up is None:
-            return None if over > SIDE_LIFT else self.arm.line(release, outside, quat, steps=4, loose_end=True)
-        out = self.arm.line(release + lift, outside + lift, quat, steps=4, loose_end=True, seed=up[-1])
+            return None if over > SIDE_LIFT else line(release, outside)
+        out = line(release + lift, outside + lift, seed=up[-1])
         return up + out if out is not None else up
 
     def _into_shelf(self, out: np.ndarray) -> np.ndarray:
