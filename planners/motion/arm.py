@@ -122,7 +122,10 @@ class Arm:
         fingers opening to `grip` (m per finger) on the way, touches nothing, else through `raised`, quicker (the
         hand is empty). From `raised` the fingers open on the way only if that leg is clear with them open, else
         once the arm is there: the open pads of a hand coming down from the raised arm swept a keyboard 77 cm
-        across a desk. Returns False where `abort()` stopped the move (see `Controller.move_through`)."""
+        across a desk; where that leg touches something, through a configuration from which it is clear, where
+        `_swing_via` finds one (with the fingers open, else closed): straight from the raised arm, a hand
+        reaching for a microwave door's edge pushed the door 10 degrees shut. Returns False where `abort()`
+        stopped the move (see `Controller.move_through`)."""
         moved = True
         if self.folded:
             opened = q_goal.copy()
@@ -133,8 +136,9 @@ class Arm:
             else:
                 raised = self.raised(q_goal[3])
                 early = grip is None or self.swing_clear(raised, opened)
-                moved = self.controller.move_through([raised, q_goal], grip=grip if early else None, abort=abort,
-                                                     **FREE_MOTION)
+                via = [] if early else self._swing_via(raised, opened) or self._swing_via(raised, q_goal)
+                moved = self.controller.move_through([raised, *via, q_goal], grip=grip if early else None,
+                                                     abort=abort, **FREE_MOTION)
                 if moved and not early:
                     self.controller.set_grip(grip)
         else:
