@@ -31,7 +31,9 @@ FLOOR_GROUP = 1  # geom group of floors, so a ray can look for the floor alone
 VOLUME_GROUP = 4  # site group of interior volumes (hidden)
 WALL_RGBA = (0.85, 0.83, 0.78, 1.0)
 FLOOR_RGBA = {"outside": (0.45, 0.55, 0.4, 1.0)}
-FURNITURE_FRICTION = (0.9, 0.005, 0.0001)
+FURNITURE_FRICTION = (0.9, 0.005, 0.002)  # sliding, torsional (m), rolling (m): furniture and floors resist
+FURNITURE_CONDIM = 6  # rolling too (a contact takes the larger condim and each friction's larger coefficient of its
+# two geoms): without rolling friction, a vacuum cleaner fallen on its side rolled across the kitchen for minutes
 CONTACT_SOLREF = (0.005, 1.0)  # stiff enough that a dropped object cannot sink through a 2 cm board
 FREE_DAMPING = 0.002  # N s/m and N m s/rad on free objects: damps the chatter of thin objects, negligible in flight
 IDENTITY_QUAT = (1.0, 0.0, 0.0, 0.0)
@@ -70,6 +72,7 @@ def _add_box(body: mujoco.MjsBody, name: str, box: Box, density: float | None = 
     pos, quat = _in_body(frame, box.center)
     geom = body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, pos=pos, quat=quat, size=box.half, rgba=box.rgba)
     geom.friction = FURNITURE_FRICTION
+    geom.condim = FURNITURE_CONDIM
     geom.solref = CONTACT_SOLREF
     if density is not None:
         geom.density = density
@@ -85,6 +88,7 @@ def _add_floors_and_walls(spec: mujoco.MjSpec, layout: Layout) -> None:
                                        rgba=FLOOR_RGBA.get(room.name, (0.72, 0.62, 0.5, 1.0)))
         geom.group = FLOOR_GROUP
         geom.friction = FURNITURE_FRICTION
+        geom.condim = FURNITURE_CONDIM
         geom.solref = CONTACT_SOLREF
     for k, (x0, y0, x1, y1) in enumerate(wall_segments(layout)):
         h = layout.wall_height
