@@ -253,9 +253,17 @@ class Place:
         else:
             self.arm.reach(over[0])
         self.controller.settle(0.003)
-        # aimed again from where it hangs in the hand now (see `_aimed_again`)
-        release = target + grip.xpos - self.world.object_pose(name)[0] + np.array([0.0, 0.0, 0.01])
-        down = self.arm.line(grip.xpos.copy(), release, quat)
+        # aimed again from where it hangs in the hand now where it shifted more than CARRY_SLIP on the way there
+        # and the arm reaches that (a laundry basket pinched at its rim pivoted 35 degrees on the way above its spot
+        # and stopped 5.5 cm above the floor)
+        again = target + grip.xpos - self.world.object_pose(name)[0] + np.array([0.0, 0.0, 0.01])
+        down = None
+        if np.linalg.norm(again - release) > CARRY_SLIP:  # over the spot again, then straight down
+            over_again = self.arm.line(grip.xpos.copy(), again + np.array([0.0, 0.0, APPROACH]), quat)
+            down = over_again and self.arm.line(again + np.array([0.0, 0.0, APPROACH]), again, quat,
+                                                seed=over_again[-1])
+            down, release = (over_again + down, again) if down else (None, release)
+        down = down or self.arm.line(above, release, quat)
         if down is None:
             return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
         struck = self._struck(name, down, onto=node if node in self.world.object_names else None)
@@ -389,7 +397,6 @@ class Place:
             if ease is None:
                 continue
             self._ease_to(ease, start.q)
-            path, release = self._aimed_again(name, target, rotation, path, release)
             self.controller.move_through(path)
             self.controller.settle(0.003)
             return self._release_on(name, node, target, release, quat)
@@ -420,25 +427,10 @@ class Place:
                     continue
                 ease, path = planned
                 self._ease_to(ease, path[0])
-                path, release = self._aimed_again(name, target, turned, path[1:], release)
-                self.controller.move_through(path)
+                self.controller.move_through(path[1:])
                 self.controller.settle(0.003)
                 return self._release_on(name, node, target, release, matrix_to_quat(turned))
         return None
-
-    def _aimed_again(self, name: str, target: np.ndarray, rotation: np.ndarray, path: list[np.ndarray],
-                     release: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
-        """(the way down, the grip site's release point, m) for the held `name` eased above `target` (m) with
-        the grip at `rotation` (shape (3, 3)), where it hangs in the hand now: it may have turned in the fingers
-        on the way (a laundry basket pinched at its rim pivoted 35 degrees on the way above its spot and stopped
-        5.5 cm above the floor). A way to APPROACH m above it and straight down, checked clear, else the planned `path`
-        (configurations, each shape (13,)) to `release` (m)."""
-        held = self.arm.held_object(name)
-        again = target + np.array([0.0, 0.0, 0.01]) - rotation @ held.position
-        here = self.ik.grip_pose(self.controller.target)[0]
-        line = self.arm.checked_line(self.controller.target, [here, again + np.array([0.0, 0.0, APPROACH]), again],
-                                     matrix_to_quat(rotation), held)
-        return (line, again) if line is not None else (path, release)
 
     def _lowering_rotations(self, name: str) -> list[np.ndarray]:
         """The grip rotations (each shape (3, 3)) to lower the held `name` at, in the order tried: where it hangs
