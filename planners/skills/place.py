@@ -41,7 +41,8 @@ from planners.skills.result import SkillResult
 APPROACH = 0.12  # m above the grasp the gripper comes from and leaves to (top grasps; see Grasp.approach)
 NO_UP_FAMILIES = ("cloth", "sphere")  # shapes that lie as well one way as another: put down, none falls over
 CARRY_SLIP = 0.03  # m the held object may shift in the hand on the way into a shelf before it no longer goes in
-# as planned; one that moved more while carried, the fingers met, fell out
+# as planned (one that moved more while carried, the fingers met, fell out), and on the way above a spot before it is
+# aimed again (`_lower_onto`)
 UPRIGHT_TURN = math.radians(3.0)  # rad a held object hangs tilted at least before a lowering turns it upright
 TOP_SPOTS = 4  # free spots on an open top tried for a place (the first one no way down is blocked to),
 TOP_SPOT_GAP = 0.08  # m apart at least,
@@ -218,8 +219,11 @@ class Place:
         hand (turned to stand it up, see `_lowering_rotations`), let go and retreat. Stopped `short` with the object
         low: first lift it over the surface and what stands within PASS_NEAR of the spot (driven in low, a can of
         wipes swept a sauce pan on the stove 17 cm aside), then drive in close (the object passes over the edge)
-        and move it across to above the spot in a straight line. Nothing is lowered where the arm or the object
-        would come down on another object (`_struck`)."""
+        and move it across to above the spot in a straight line. Where the object shifted more than CARRY_SLIP in
+        the hand on the way above the spot, it is aimed again from where it hangs then, over its spot and straight
+        down, if the arm reaches that (a laundry basket pinched at its rim pivoted 35 degrees on the way and stopped
+        5.5 cm above the floor). Nothing is lowered where the arm or the object would come down on another object
+        (`_struck`)."""
         grip = self.world.data.site("robot/grip")
         now = grip.xmat.reshape(3, 3)
         offset = grip.xpos - self.world.object_pose(name)[0]  # where the object hangs from the hand now
@@ -253,16 +257,14 @@ class Place:
         else:
             self.arm.reach(over[0])
         self.controller.settle(0.003)
-        # aimed again from where it hangs in the hand now where it shifted more than CARRY_SLIP on the way there
-        # and the arm reaches that (a laundry basket pinched at its rim pivoted 35 degrees on the way above its spot
-        # and stopped 5.5 cm above the floor)
-        again = target + grip.xpos - self.world.object_pose(name)[0] + np.array([0.0, 0.0, 0.01])
+        again = target + grip.xpos - self.world.object_pose(name)[0] + np.array([0.0, 0.0, 0.01])  # as it hangs now
         down = None
-        if np.linalg.norm(again - release) > CARRY_SLIP:  # over the spot again, then straight down
-            over_again = self.arm.line(grip.xpos.copy(), again + np.array([0.0, 0.0, APPROACH]), quat)
-            down = over_again and self.arm.line(again + np.array([0.0, 0.0, APPROACH]), again, quat,
-                                                seed=over_again[-1])
-            down, release = (over_again + down, again) if down else (None, release)
+        if np.linalg.norm(again - release) > CARRY_SLIP:  # turned in the fingers: over the spot again, then down
+            lifted = again + np.array([0.0, 0.0, APPROACH])
+            over_again = self.arm.line(grip.xpos.copy(), lifted, quat)
+            straight = over_again and self.arm.line(lifted, again, quat, seed=over_again[-1])
+            if straight:
+                down, release = over_again + straight, again
         down = down or self.arm.line(above, release, quat)
         if down is None:
             return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
