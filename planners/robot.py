@@ -40,6 +40,8 @@ HOME_KEY = "home"
 # weld, and noslip in the apartment alone made generating them 1.3 to 1.5 times slower.
 NOSLIP_ITERATIONS = 5
 DEFAULT_POSE = (3.0, 1.3, 0.0)  # (x m, y m, yaw rad): dining room, facing east into free floor
+ROBOT_CLEARANCE_M = 0.55  # the person neither walks nor sets anything down within this distance (m) of the
+# robot's base centre
 
 
 def load_robot_spec() -> mujoco.MjSpec:

@@ -25,7 +25,7 @@ from homer_sim.person.executor import DayLog, Executor
 from homer_sim.world import World
 from planners.motion.control import FREE_MOTION
 from planners.motion.navigation import IN_THE_WAY, NavigationError
-from planners.robot import DEFAULT_POSE
+from planners.robot import DEFAULT_POSE, ROBOT_CLEARANCE_M
 from planners.skills import Robot, SkillResult
 from planners.skills.parts import parts_to_open
 from scenarios.causes import SKILL_ERROR
@@ -35,7 +35,6 @@ log = logging.getLogger(__name__)
 
 FALLBACK_PLACES = 3  # places tried to put an object down after a failed place
 COLLATERAL_M = 0.02  # an object the robot moved farther than this (m) without being asked is collateral
-ROBOT_CLEARANCE_M = 0.55  # the person does not walk within this distance (m) of the robot's base centre
 PERSON_RADIUS_M = 0.25  # m around the person's position the robot's base keeps out of
 
 
@@ -330,12 +329,8 @@ class Helper:
 
     def robot_cells(self) -> np.ndarray:
         """Grid cells the person must not walk through: a disk around the robot's base."""
-        plan = self.executor.spots.plan
-        blocked = np.zeros_like(self.executor.spots.blocked)
         x, y = self.robot.controller.q()[:2]
-        xs, ys = plan.cell_centers(0, blocked.shape[0], 0, blocked.shape[1])
-        blocked[np.hypot(xs - x, ys - y) < ROBOT_CLEARANCE_M] = True
-        return blocked
+        return self.executor.spots.plan.disk_cells(x, y, ROBOT_CLEARANCE_M)
 
     def event(self, text: str, minute: float, level: str = "INFO") -> None:
         log.info("%.1f min: %s", minute, text)

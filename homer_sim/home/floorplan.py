@@ -35,8 +35,15 @@ class FloorPlan:
         ys = self.origin[1] + (np.arange(j0, j1) + 0.5) * self.resolution
         return np.meshgrid(xs, ys, indexing="ij")
 
-    def disk_is_free(self, x: float, y: float, radius: float, extra: list[tuple] = ()) -> bool:
-        """True if no blocked cell (or `extra` rectangle (x0, y0, x1, y1)) has its centre within `radius` m."""
+    def disk_cells(self, x: float, y: float, radius: float) -> np.ndarray:
+        """A grid of the plan's shape, True at the cells whose centre lies within `radius` m of (x, y)."""
+        xs, ys = self.cell_centers(0, self.occupied.shape[0], 0, self.occupied.shape[1])
+        return np.hypot(xs - x, ys - y) < radius
+
+    def disk_is_free(self, x: float, y: float, radius: float, extra: list[tuple] = (),
+                     blocked: np.ndarray | None = None) -> bool:
+        """True if no blocked cell (of the plan, or of `blocked`, a grid of the plan's shape: a robot standing there)
+        nor `extra` rectangle (x0, y0, x1, y1) has its centre within `radius` m."""
         for x0, y0, x1, y1 in extra:
             dx = max(x0 - x, 0.0, x - x1)
             dy = max(y0 - y, 0.0, y - y1)
@@ -48,7 +55,8 @@ class FloorPlan:
             return False
         cx, cy = self.cell_centers(i0, i1 + 1, j0, j1 + 1)
         inside = (cx - x) ** 2 + (cy - y) ** 2 <= radius * radius
-        return not np.any(self.occupied[i0 : i1 + 1, j0 : j1 + 1] & inside)
+        grid = self.occupied if blocked is None else self.occupied | blocked
+        return not np.any(grid[i0 : i1 + 1, j0 : j1 + 1] & inside)
 
     def rect_is_free(self, rect: tuple[float, float, float, float], shrink: float = 0.02) -> bool:
         """True if no blocked cell centre lies inside the world rectangle shrunk by `shrink` m on each side."""

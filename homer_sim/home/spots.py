@@ -231,8 +231,9 @@ class Spots:
         return all(self.plan.rect_is_free(end, shrink=0.0) for end in ends if end[2] > end[0] and end[3] > end[1])
 
     def floor_spot(self, name: str, room: str, near: tuple[float, float], rng: np.random.Generator,
-                   exclude: set[int]) -> Spot:
-        """A free spot on the floor of `room` near `near` (m), away from furniture and other objects."""
+                   exclude: set[int], blocked: np.ndarray | None = None) -> Spot:
+        """A free spot on the floor of `room` near `near` (m), away from furniture, other objects and the cells of
+        `blocked` (a grid of the floor plan's shape: where a robot stands)."""
         size = self.world.object_class(name).size
         boxes = self.footprints(exclude)
         boxes = boxes[boxes[:, 4] < 0.05]
@@ -242,7 +243,7 @@ class Spots:
             spread = 0.4 + 0.05 * attempt
             x, y = near[0] + rng.uniform(-spread, spread), near[1] + rng.uniform(-spread, spread)
             inside = rect[0] + radius < x < rect[2] - radius and rect[1] + radius < y < rect[3] - radius
-            if inside and self.plan.disk_is_free(x, y, radius + 0.02, self.keep_out) and not _overlaps_any(
+            if inside and self.plan.disk_is_free(x, y, radius + 0.02, self.keep_out, blocked) and not _overlaps_any(
                     boxes, (x - radius, y - radius, x + radius, y + radius)):
                 return Spot((float(x), float(y), size[2] / 2 + DROP_LIFT), 0.0, room, None)
         raise PlacementError(f"no free floor for {name} in {room} near {np.round(near, 2).tolist()}")

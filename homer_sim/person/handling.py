@@ -168,6 +168,11 @@ class Handling:
         if hand is not None:
             self.avatar.set_hand(hand, self.avatar.hand_home(hand), follow=False)
 
+    def _others(self) -> np.ndarray | None:
+        """The floor cells the walker's `dynamic_obstacles` block now (where a robot stands), None without any:
+        nothing is set down there (a vacuum cleaner put down beside the robot fell against it)."""
+        return self.walker.dynamic_obstacles() if self.walker.dynamic_obstacles else None
+
     def _make_way_for(self, art) -> bool:
         """Ask the walker's `make_way` to clear the floor in front of `art`'s furniture (`keep_out_rect`, points
         every 0.1 m); whether it moved."""
@@ -253,7 +258,8 @@ class Handling:
             raise blocked
         exclude = set(self.carried_indices()) | {self.world.object_index(name)}
         try:
-            spot = self.spots.floor_spot(name, room, (self.avatar.x, self.avatar.y), self.day.rng, exclude)
+            spot = self.spots.floor_spot(name, room, (self.avatar.x, self.avatar.y), self.day.rng, exclude,
+                                         self._others())
         except PlacementError:
             raise blocked from None
         log.debug("%s: set aside so a door opens", name)
@@ -354,7 +360,8 @@ class Handling:
         if target in self.rooms:
             if self.world.layout.room_at(self.avatar.x, self.avatar.y) != target:
                 self.walker.go(target)
-            spot = self.spots.floor_spot(name, target, (self.avatar.x, self.avatar.y), self.day.rng, exclude)
+            spot = self.spots.floor_spot(name, target, (self.avatar.x, self.avatar.y), self.day.rng, exclude,
+                                         self._others())
             self.release(name, spot)
         elif target in self.movable:
             self.walker.go(target)

@@ -43,6 +43,7 @@ from homer_sim.graph import OUTSIDE
 from homer_sim.home.apartment import default_layout
 from homer_sim.home.catalog import CATALOG
 from homer_sim.home.validate import blocked_when_open
+from planners.robot import PREFIX, ROBOT_CLEARANCE_M
 from planners.suites.collateral import collateral_reason, displaced
 from planners.suites.grasp_suite import stable_hash
 
@@ -156,10 +157,16 @@ class Bench:
         self.world = World(extras=[add_avatar, add_robot])
         self.dataset.require_nodes(self.world.layout.node_names())
         self.executor = Executor(self.world)
+        self.executor.dynamic_obstacles = self._robot_cells  # the person keeps clear of the robot, as in a day
         self.containers: dict[str, list[str]] = {}
         for art in self.world.articulations.values():
             self.containers.setdefault(art.furniture, []).append(art.name)
         self.blocked = blocked_when_open(self.world.layout)
+
+    def _robot_cells(self) -> np.ndarray:
+        """The floor cells within ROBOT_CLEARANCE_M of the robot's base (see `scenarios.assist`)."""
+        base = self.world.data.qpos[[self.world.model.joint(PREFIX + n).qposadr[0] for n in ("base_x", "base_y")]]
+        return self.executor.spots.plan.disk_cells(float(base[0]), float(base[1]), ROBOT_CLEARANCE_M)
 
     def day(self, occurrence: Occurrence) -> Day:
         from homer_sim.data.dataset import day_path, read_day
