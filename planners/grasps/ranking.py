@@ -7,7 +7,8 @@ FACE_FIRST_TURN off the front is taken square to its own face first (pads closin
 turned further turn it between them, and it keeps turning in the hand); a ball is taken front to back right after
 level (held across, pitched, it meets the pads past their tips and creeps out). From above (`ABOVE_ORDER`), grasps
 whose open fingers land on something (a neighbour, a drawer's wall) go after those that land clear, off-centre
-copies after both, and grasps squared to a drawer's walls last.
+copies after both, and grasps squared to a drawer's walls last; in a drawer, off-centre copies that slide the object
+along the drawer's runners go after all of those (see `rank_from_above`).
 """
 
 from __future__ import annotations
@@ -17,12 +18,16 @@ from collections.abc import Callable, Sequence
 from enum import Enum
 from typing import NamedTuple
 
+import numpy as np
+
 from homer_sim.home.catalog import ObjectClass
 from planners.grasps.candidate import Family, Grasp, GraspKind
 
 FACE_FIRST_TURN = math.radians(4.0)  # rad an object stands turned off the furniture's front beyond which grasps
 # square to its face go first
 ALONG_EARLY_FAMILIES = ("sphere",)  # shapes taken front to back right after level, before pitched
+DRAG_TURN = math.radians(45.0)  # rad: an off-centre grasp's finger travel closer than this to a drawer's slide
+# direction pushes the object along the runners
 
 
 class Group(NamedTuple):
@@ -103,11 +108,20 @@ def rank_in_shelf(grasps: Sequence[Grasp], case: ShelfCase) -> list[Grasp]:
     return sorted(grasps, key=lambda g: _first(g.kind, [group.takes for group in groups]))
 
 
-def rank_from_above(grasps: Sequence[tuple[Grasp, bool]]) -> list[Grasp]:
+def rank_from_above(grasps: Sequence[tuple[Grasp, bool]], slide: np.ndarray | None = None) -> list[Grasp]:
     """The grasps of (grasp, whether its open fingers land clear; for an off-centre copy, its original's) pairs
-    in the order ABOVE_ORDER gives (stable within a group)."""
+    in the order ABOVE_ORDER gives (stable within a group). In a drawer sliding along `slide` (a horizontal
+    direction, shape (2,) or (3,)), off-centre copies whose finger travel lies within DRAG_TURN of it go after
+    every other grasp: closing, the near finger slides the object along the runners, and its friction on the
+    drawer's bottom drags the drawer, and what else is in it, along (a charger's grasp moved a cd 2.2 cm so)."""
     tests = [test for _, test in ABOVE_ORDER]
-    ranked = sorted(grasps, key=lambda pair: _first(AboveCase(pair[0].kind, pair[1]), tests))
+
+    def drags(grasp: Grasp) -> bool:
+        if slide is None or not grasp.kind.offset:
+            return False
+        return abs(float(grasp.rotation[:2, 1] @ slide[:2])) > math.cos(DRAG_TURN) * float(np.linalg.norm(slide[:2]))
+
+    ranked = sorted(grasps, key=lambda pair: (drags(pair[0]), _first(AboveCase(pair[0].kind, pair[1]), tests)))
     return [grasp for grasp, _ in ranked]
 
 

@@ -190,7 +190,9 @@ class Pick:
         offsets = [(o, fits) for g, fits in zip(grasps, clear, strict=True) for o in offset_grasps(cls, quat, g)
                    if self._fingers_fit(o)]
         unchecked, upright = [], not self.arm.fallen_over(name)
-        for grasp in rank_from_above([*zip(grasps, clear, strict=True), *offsets]):  # a clear way in first
+        slide = None if furniture is None or drawer_rim(self.world, node, position) is None else (
+            self.navigator.front_normal(node))
+        for grasp in rank_from_above([*zip(grasps, clear, strict=True), *offsets], slide):  # a clear way in first
             outcome = self._grasp_from_above(name, grasp, stand_failure, checked_only=True)
             if outcome is None:
                 unchecked += [] if grasp.kind.offset else [grasp]

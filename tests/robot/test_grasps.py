@@ -35,6 +35,7 @@ from planners.grasps.candidate import (
 )
 from planners.grasps.features import handle_grasps
 from planners.grasps.geometry import footprint
+from planners.grasps.ranking import rank_from_above
 from planners.grasps.shelf import (
     PALM_MARGIN,
     ROLL,
@@ -215,6 +216,20 @@ def test_an_off_centre_grasp_keeps_the_near_finger_beside_the_object() -> None:
         assert abs(float((g.position - grasp.position) @ grasp.rotation[:, 1])) == pytest.approx(shift)
     wide = replace(charger, size=(0.2, 0.14, 0.03))  # 14 cm across: the palm would move only 5 mm, no try
     assert offset_grasps(wide, _yawed(0.0), top_grasps(wide, position, _yawed(0.0), np.zeros(2))[0]) == []
+
+
+def test_in_a_drawer_off_centre_grasps_that_push_along_its_runners_come_last() -> None:
+    charger = CATALOG["charger"]  # 6 x 4.5 cm: taken across its narrow side (y) or, turned, along x
+    position = np.array([0.0, 0.0, charger.size[2] / 2])
+    top, turned = top_grasps(charger, position, _yawed(0.0), np.array([1.0, 0.0]))[:2]
+    assert abs(top.rotation[1, 1]) == pytest.approx(1.0) and abs(turned.rotation[0, 1]) == pytest.approx(1.0)
+    along_x, along_y = offset_grasps(charger, _yawed(0.0), turned), offset_grasps(charger, _yawed(0.0), top)
+    pairs = [(g, True) for g in along_x + along_y]
+    assert rank_from_above(pairs) == along_x + along_y  # out of a drawer: as given (one group)
+    assert rank_from_above(pairs, np.array([-1.0, 0.0, 0.0])) == along_y + along_x  # a drawer sliding along x
+    assert rank_from_above(pairs, np.array([0.0, 1.0])) == along_x + along_y  # along y
+    centred = [(turned, False)]  # a centred grasp keeps its place, whatever its travel
+    assert rank_from_above(pairs + centred, np.array([1.0, 0.0]))[0] is turned
 
 
 def test_squared_grasps_turn_the_palm_to_the_drawer_walls_and_open_past_the_turned_box() -> None:
