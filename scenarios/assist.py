@@ -328,7 +328,7 @@ class Helper:
         return [(x - PERSON_RADIUS_M, y - PERSON_RADIUS_M, x + PERSON_RADIUS_M, y + PERSON_RADIUS_M)]
 
     def robot_cells(self) -> np.ndarray:
-        """Grid cells the person must not walk through: a disk around the robot's base."""
+        """Grid cells the person neither walks through nor sets anything down on: a disk around the robot's base."""
         x, y = self.robot.controller.q()[:2]
         return self.executor.spots.plan.disk_cells(x, y, ROBOT_CLEARANCE_M)
 
