@@ -146,6 +146,33 @@ class ClearanceCheck:
         return {int(b) for b in self.model.geom_bodyid[other]} & set(bodies)
 
 
+    def slide_strikes(self, body: int, shift: np.ndarray, bodies: frozenset[int], graze: float = FINGER_GRAZE
+                      ) -> set[int]:
+        """Of `bodies` (body ids), those that free body `body`, moved `shift` (m, shape (3,)) from where it stands,
+        would press into deeper than `graze` m and does not where it stands (what a grasp's closing fingers push
+        it into)."""
+        d, model = self.scratch, self.model
+        adr = int(model.jnt_qposadr[model.body_jntadr[body]])
+        mine = model.geom_bodyid == body
+        geoms = np.flatnonzero(mine)
+
+        def pressed(offset: np.ndarray) -> set[int]:
+            d.qpos[:] = self.world.data.qpos
+            d.qpos[adr:adr + 3] += offset
+            mujoco.mj_kinematics(model, d)
+            model.geom_conaffinity[geoms] = self.conaffinity[geoms]  # the object collides with the rest
+            try:
+                mujoco.mj_collision(model, d)
+            finally:
+                model.geom_conaffinity[geoms] = 0
+            g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
+            deep = d.contact.dist[: d.ncon] < -graze
+            other = np.concatenate([g2[deep & mine[g1] & ~mine[g2]], g1[deep & mine[g2] & ~mine[g1]]])
+            return {int(b) for b in model.geom_bodyid[other]} & set(bodies)
+
+        return pressed(np.asarray(shift, dtype=float)) - pressed(np.zeros(3))
+
+
 def _same_filter(model: mujoco.MjModel, robot: np.ndarray) -> bool:
     """Whether MuJoCo's contype/conaffinity test passes the same pairs (any geom that may be in or on the robot,
     against any geom off it) when the geoms off the robot have conaffinity 0, as in `ClearanceCheck.model`."""

@@ -172,6 +172,26 @@ def test_grasps_from_above_are_planned_again_where_a_failed_one_moved_the_object
     assert result["collateral"] == 0
 
 
+def test_closing_fingers_neither_sweep_a_neighbour_nor_slide_the_object_into_one() -> None:
+    """Seed 2024's second start pose of the rice in the cupboard, the oil beside it: the pitched grasp moved aside
+    opened fully, and closing, its far finger swept past the oil's front and the rice slid 4.5 cm to the grasp's
+    centre, into the oil; the oil came out of the cupboard with the rice, 31 cm. Such grasps are not tried."""
+    included, _ = suite_classes()
+    result = run_suite(trials=2, seed=2024, progress=False, classes={"food_rice": included["food_rice"]})
+    assert result["per_class"]["food_rice"]["successes"] == 2, result["per_class"]["food_rice"]["failures"]
+    assert result["collateral"] == 0
+
+
+def test_a_hand_stopped_on_its_way_in_lets_go_of_what_it_pushed_before_it_backs_off() -> None:
+    """Seed 2024's third start pose of the perfume in the bathroom cabinet: the far finger of a grasp moved aside
+    pushed the toilet roll beside it 0.6 cm and the hand stopped; backing off, the finger still pressed on the roll
+    and dragged it 2.2 cm further. The fingers now close until they let go of it first."""
+    included, _ = suite_classes()
+    result = run_suite(trials=3, seed=2024, progress=False, classes={"perfume": included["perfume"]})
+    assert result["per_class"]["perfume"]["successes"] == 3, result["per_class"]["perfume"]["failures"]
+    assert result["collateral"] == 0
+
+
 @pytest.mark.slow
 def test_full_grasp_suite_meets_its_targets() -> None:
     result = run_suite(seed=0, progress=False)
