@@ -61,6 +61,9 @@ NEIGHBOUR_PUSH = 0.005  # m an open finger coming down onto a grasp may press in
 WATCH_PUSH = 0.005  # m another object may move while the hand goes in to a grasp before the hand stops and backs
 # off (a descent onto shampoo pushed the conditioner beside it 1 cm in 0.07 s, then 18 cm; a tin of coffee stopped
 # at 1 cm went on tipping to 2.9 cm; the collateral limit is 2 cm)
+SLIDE_PUSH = 0.01  # m the object, slid to an off-centre grasp's centre as the fingers close, may press into a
+# neighbour (it yields that far, half the 2 cm collateral limit; a charger closed on so pushed the cd beside it
+# 0.3-1.5 cm, a rice box 4.5 cm towards the oil 3.5 cm from it dragged the oil out)
 PUSH_NOISE = 0.002  # m an object may move while a grasp goes in without counting as pushed by it
 DESCENT_DRIFT = 0.005  # m a loose waypoint of the descent onto a grasp may stray from the line (see `_descent`)
 
@@ -275,7 +278,8 @@ class Pick:
         one strikes a wall's edge, the fingers stall there and the other pushes the object against the wall instead
         of against a pad; one sweeping past a neighbour drags it along (a rice box's far finger took the oil beside
         it out of the cupboard, 31 cm). Nor may the object, slid between the pads to the grasp's centre (an
-        off-centre grasp's (`aside`, `offset`) near finger pushes it there), press into a neighbour."""
+        off-centre grasp's (`aside`, `offset`) near finger pushes it there), press into a neighbour deeper than
+        SLIDE_PUSH m."""
         model = self.world.model
         _, watched = self._watch
         own = np.flatnonzero(np.isin(model.geom_bodyid, self.world.object_body_ids[~watched]))
@@ -294,7 +298,7 @@ class Pick:
         shift[2] = 0.0  # along the shelf or the bottom it stands on
         if np.linalg.norm(shift) > PUSH_NOISE:
             neighbours = frozenset(self.world.object_body_ids[watched].tolist())
-            if pressed := self.clearance.slide_strikes(body, shift, neighbours):
+            if pressed := self.clearance.slide_strikes(body, shift, neighbours, SLIDE_PUSH):
                 return f"closing, the fingers would slide it into {self._named_bodies(pressed)}"
         return None
 
