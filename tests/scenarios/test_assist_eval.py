@@ -196,3 +196,44 @@ def test_a_put_down_that_raises_after_a_skill_error_stops_the_plan_not_the_day(w
     [failed] = helper.log.relocations
     assert failed.relocation == bowl and not failed.done and cause_of(failed.reason) == "skill error"
     assert robot.held == "bowl" and [s.step.action for s in helper.log.steps] == ["pick", "place"]
+
+
+def test_drawers_an_open_failed_part_way_are_closed_again_and_untouched_ones_are_not(world) -> None:
+    """A dresser whose first drawer opened only part way (0.66) and second not at all: the relocation into it fails
+    as "did not open", the part-way drawer is closed again (left so, the clothes riding in it counted as displaced)
+    and the untouched one is not driven to. The skills are stand-ins; the drawer's joint is really moved."""
+    from types import SimpleNamespace
+
+    from homer_sim.observe import SceneGraphObserver
+    from planners.skills import SkillResult
+    from scenarios.assist import AssistLog, Helper
+    from scenarios.psi import PlanStep, Relocation
+
+    part_way, untouched = "dresser/drawer_0", "dresser/drawer_1"
+    closed: list[str] = []
+
+    def set_openness(name: str, value: float) -> None:
+        a = world.articulation(name)
+        world.data.qpos[a.qpos_adr] = a.range[0] + value * (a.range[1] - a.range[0])
+
+    def open_articulation(name: str) -> SkillResult:
+        if name == part_way:
+            set_openness(name, 0.66)
+        return SkillResult(False, f"open {name}: openness {world.openness(name):.2f}, below 0.9")
+
+    def close_articulation(name: str) -> SkillResult:
+        closed.append(name)
+        set_openness(name, 0.0)
+        return SkillResult(True)
+
+    helper = Helper.__new__(Helper)  # the turn's bookkeeping only: the skills are the stand-ins above
+    helper.world, helper.recording, helper.log, helper.waiting, helper._placed_at = world, None, AssistLog(), [], {}
+    helper.robot = SimpleNamespace(observer=SceneGraphObserver(world), held=None, open_articulation=open_articulation,
+                                   close_articulation=close_articulation)
+    socks = Relocation("clothes_socks", "washing_machine", "dresser", 1, 0.9)
+    steps = [PlanStep("open", part_way, "dresser"), PlanStep("open", untouched, "dresser"),
+             PlanStep("place", "dresser", "dresser", socks.obj),
+             PlanStep("close", untouched, "dresser"), PlanStep("close", part_way, "dresser")]
+    helper._carry_out(steps, [socks], 360, float(world.data.time))
+    assert closed == [part_way]
+    assert world.openness(part_way) == 0.0 and world.openness(untouched) == 0.0
