@@ -145,7 +145,6 @@ class ClearanceCheck:
         other = np.concatenate([g2[near & mine[g1] & ~self.robot[g2]], g1[near & mine[g2] & ~self.robot[g1]]])
         return {int(b) for b in self.model.geom_bodyid[other]} & set(bodies)
 
-
     def slide_strikes(self, body: int, shift: np.ndarray, bodies: frozenset[int], graze: float = FINGER_GRAZE
                       ) -> set[int]:
         """Of `bodies` (body ids), those that free body `body`, moved `shift` (m, shape (3,)) from where it stands,
