@@ -112,11 +112,7 @@ class ClearanceCheck:
             geoms = list(held.geoms)
             robot = checked = robot.copy()  # the fingers are checked too, against all but the object
             robot[geoms] = True
-            self.model.geom_conaffinity[geoms] = self.conaffinity[geoms]  # the object collides with the rest
-            try:
-                mujoco.mj_collision(self.model, d)
-            finally:
-                self.model.geom_conaffinity[geoms] = 0
+            self._collide(geoms)
         g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
         touching = (checked[g1] != checked[g2]) & ~(robot[g1] & robot[g2]) & (d.contact.dist[: d.ncon] < self.MARGIN)
         return not touching.any()
@@ -135,11 +131,7 @@ class ClearanceCheck:
         geoms = list(held.geoms)
         mine = self.checked.copy()
         mine[geoms] = True
-        self.model.geom_conaffinity[geoms] = self.conaffinity[geoms]
-        try:
-            mujoco.mj_collision(self.model, d)
-        finally:
-            self.model.geom_conaffinity[geoms] = 0
+        self._collide(geoms)
         g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
         near = d.contact.dist[: d.ncon] < margin
         other = np.concatenate([g2[near & mine[g1] & ~self.robot[g2]], g1[near & mine[g2] & ~self.robot[g1]]])
@@ -159,17 +151,23 @@ class ClearanceCheck:
             d.qpos[:] = self.world.data.qpos
             d.qpos[adr:adr + 3] += offset
             mujoco.mj_kinematics(model, d)
-            model.geom_conaffinity[geoms] = self.conaffinity[geoms]  # the object collides with the rest
-            try:
-                mujoco.mj_collision(model, d)
-            finally:
-                model.geom_conaffinity[geoms] = 0
+            self._collide(geoms)
             g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
             deep = d.contact.dist[: d.ncon] < -graze
             other = np.concatenate([g2[deep & mine[g1] & ~mine[g2]], g1[deep & mine[g2] & ~mine[g1]]])
             return {int(b) for b in model.geom_bodyid[other]} & set(bodies)
 
         return pressed(np.asarray(shift, dtype=float)) - pressed(np.zeros(3))
+
+
+    def _collide(self, geoms) -> None:
+        """mj_collision on the scratch data, an object's `geoms` (ids) colliding with the rest as well as with the
+        robot (the copy's other apartment geoms have no conaffinity)."""
+        self.model.geom_conaffinity[geoms] = self.conaffinity[geoms]
+        try:
+            mujoco.mj_collision(self.model, self.scratch)
+        finally:
+            self.model.geom_conaffinity[geoms] = 0
 
 
 def _same_filter(model: mujoco.MjModel, robot: np.ndarray) -> bool:

@@ -289,7 +289,7 @@ class Pick:
         for value in np.arange(grasp.pre_opening - CLOSING_STEP, 0.0, -CLOSING_STEP):
             q[self.controller.n_body:] = value
             if struck := self.clearance.finger_contacts(q) - touched:
-                return f"a closing finger would strike {self._named(struck)}"
+                return f"a closing finger would strike {', '.join(self._names({model.geom_bodyid[g] for g in struck}))}"
         if not (grasp.kind.aside or grasp.kind.offset):
             return None
         body = self.world.object_body_ids[self.world.object_index(name)]
@@ -299,17 +299,13 @@ class Pick:
         if np.linalg.norm(shift) > PUSH_NOISE:
             neighbours = frozenset(self.world.object_body_ids[watched].tolist())
             if pressed := self.clearance.slide_strikes(body, shift, neighbours, SLIDE_PUSH):
-                return f"closing, the fingers would slide it into {self._named_bodies(pressed)}"
+                return f"closing, the fingers would slide it into {', '.join(self._names(pressed))}"
         return None
 
-    def _named(self, geoms: set[int]) -> str:
-        """The objects (else the furniture bodies) that `geoms` (geom ids) belong to, for a reason."""
-        return self._named_bodies({int(self.world.model.geom_bodyid[g]) for g in geoms})
-
-    def _named_bodies(self, bodies: set[int]) -> str:
-        """Names of `bodies` (body ids), objects by their object names, for a reason."""
+    def _names(self, bodies) -> list[str]:
+        """Sorted names of `bodies` (body ids): objects by their object names, other bodies by theirs."""
         names = {int(b): n for n, b in zip(self.world.object_names, self.world.object_body_ids, strict=True)}
-        return ", ".join(sorted(names.get(b, self.world.model.body(b).name) for b in bodies))
+        return sorted({names.get(int(b), self.world.model.body(int(b)).name) for b in bodies})
 
     def _neighbours_struck(self, name: str, path: list[np.ndarray], opening: float) -> list[str]:
         """The objects other than `name` that the fingers, open `opening` m per finger, touch deeper than
@@ -318,14 +314,14 @@ class Pick:
         out)."""
         n_body = self.controller.n_body
         model = self.world.model
-        bodies = {int(b): n for n, b in zip(self.world.object_names, self.world.object_body_ids, strict=True)}
-        struck: set[str] = set()
+        ids = self.world.object_body_ids
+        objects = set(ids.tolist()) - {int(ids[self.world.object_index(name)])}
+        touched: set[int] = set()
         for q in path:
             q = q.copy()
             q[n_body:] = opening
-            touched = {int(model.geom_bodyid[g]) for g in self.clearance.finger_contacts(q, NEIGHBOUR_PUSH)}
-            struck |= {bodies[b] for b in touched if b in bodies}
-        return sorted(struck - {name})
+            touched |= {int(model.geom_bodyid[g]) for g in self.clearance.finger_contacts(q, NEIGHBOUR_PUSH)}
+        return self._names(touched & objects)
 
     def _pick_from_shelf(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
                          out: np.ndarray | None = None, replan: bool = True) -> SkillResult:

@@ -232,8 +232,10 @@ def test_drawers_an_open_failed_part_way_are_closed_again_and_untouched_ones_are
                                    close_articulation=close_articulation)
     socks = Relocation("clothes_socks", "washing_machine", "dresser", 1, 0.9)
     steps = [PlanStep("open", part_way, "dresser"), PlanStep("open", untouched, "dresser"),
-             PlanStep("place", "dresser", "dresser", socks.obj),
+             PlanStep("pick", socks.obj, socks.source, socks.obj), PlanStep("place", "dresser", "dresser", socks.obj),
              PlanStep("close", untouched, "dresser"), PlanStep("close", part_way, "dresser")]
     helper._carry_out(steps, [socks], 360, float(world.data.time))
+    [failed] = helper.log.relocations
+    assert not failed.done and failed.reason == "dresser did not open (open dresser/drawer_1: openness 0.00, below 0.9)"
     assert closed == [part_way]
     assert world.openness(part_way) == 0.0 and world.openness(untouched) == 0.0
