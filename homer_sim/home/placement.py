@@ -17,11 +17,16 @@ from homer_sim.graph import INSIDE, ON
 from homer_sim.home.catalog import CATALOG, ObjectClass
 from homer_sim.home.furniture import Place, footprint, furniture_geometry, local_to_world
 from homer_sim.home.layout import Furniture, Layout, ObjectDecl
+from homer_sim.robot_spec import ROBOT
 
 SPOT_GAP = 0.025  # m between neighbouring objects
 ROW_GAP = 0.065  # m between rows on an open top at the start: a finger (3.2 cm) and its margin come down between
 # an object and the one behind it, also after the grasp suite shifts the object 2.5 cm (a knife 2.5 cm in front of
 # a dish rack left no room for the finger between them)
+PALM_ROOM = ROBOT.palm_half_size[1]  # m beside each object on a shelf holding one lower than the palm is thick:
+# such an object is held only by a palm pitched down over it, 18 cm wide along the finger travel, which passes
+# between two neighbours this far either side of any object (a razor 6.5 cm from a painkillers box and a shaving
+# cream can, 17.5 cm apart, was out of the hand's reach)
 SPAWN_LIFT = 0.001  # m above the surface an object is spawned
 
 
@@ -126,7 +131,9 @@ def inside_side_gap(layout: Layout, f: Furniture, level: int, place: Place) -> f
     much room between them and the walls; else as much as they leave spread evenly, at least SPOT_GAP (the
     cheese packed 2.5 cm beside the milk left the fingers no room); less in 5 mm steps where, packed on the 1 cm
     grid of `pack_spot`, one of them would leave the front row that SPOT_GAP keeps it in (spread evenly, 4.2 cm
-    apart, the dry pasta went behind the oil on the cupboard's bottom shelf, reached only over it)."""
+    apart, the dry pasta went behind the oil on the cupboard's bottom shelf, reached only over it). On a place
+    holding an object lower than the palm is thick (too low for a level side grasp), PALM_ROOM instead of ROW_GAP
+    where there is room for it."""
     objects = [CATALOG[o.cls] for o in layout.objects if o.parent == f.name and o.level == level]
     widths = [cls.size[1] if lengthwise(f, place, cls) else cls.size[0] for cls in objects]
     spare = 2 * place.half_xy[1] - sum(widths)
@@ -140,7 +147,9 @@ def inside_side_gap(layout: Layout, f: Furniture, level: int, place: Place) -> f
                 pack_spot(place, cls, taken, lengthwise=long, side_gap=gap)
         return sum(rect[2] > front - 1e-6 for rect in taken)
 
-    widest, least = min(ROW_GAP, max(SPOT_GAP, spare / (len(widths) + 1))), in_front(SPOT_GAP)
+    low = any(cls.size[2] < 2 * ROBOT.palm_half_size[2] for cls in objects)
+    widest = min(PALM_ROOM if low else ROW_GAP, max(SPOT_GAP, spare / (len(widths) + 1)))
+    least = in_front(SPOT_GAP)
     return next((float(gap) for gap in np.arange(widest, SPOT_GAP, -0.005) if in_front(gap) >= least), SPOT_GAP)
 
 

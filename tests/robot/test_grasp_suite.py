@@ -172,6 +172,17 @@ def test_grasps_from_above_are_planned_again_where_a_failed_one_moved_the_object
     assert result["collateral"] == 0
 
 
+def test_a_razor_on_a_shelf_is_picked_between_its_neighbours() -> None:
+    """Seed 2024's first start pose of the razor, lying front to back on the bathroom cabinet's middle shelf: its
+    neighbours stood 17.5 cm apart, the palm of every grasp that reaches a razor (pitched down over it, the fingers
+    closing across) is 18 cm wide, and no grasp was left. The layout keeps the palm's room beside the objects of a
+    shelf holding one so low (`homer_sim.home.placement.PALM_ROOM`)."""
+    included, _ = suite_classes()
+    result = run_suite(trials=1, seed=2024, progress=False, classes={"razor": included["razor"]})
+    assert result["per_class"]["razor"]["successes"] == 1, result["per_class"]["razor"]["failures"]
+    assert result["collateral"] == 0
+
+
 def test_closing_fingers_neither_sweep_a_neighbour_nor_slide_the_object_into_one() -> None:
     """Seed 2024's second start pose of the rice in the cupboard, the oil beside it: the pitched grasp moved aside
     opened fully, and closing, its far finger swept past the oil's front and the rice slid 4.5 cm to the grasp's

@@ -104,26 +104,29 @@ def test_rows_on_an_open_top_leave_a_finger_between_them() -> None:
 def test_neighbours_reached_from_the_front_leave_a_finger_between_them() -> None:
     """Inside furniture, but for a drawer, the start layout keeps `inside_side_gap` beside each object: ROW_GAP
     where the place's objects fit side by side so (the cheese packed 2.5 cm beside the milk left a side grasp's
-    finger no room), as much as they leave spread evenly where they do not (the shower's corner shelf), never under
-    SPOT_GAP."""
+    finger no room), PALM_ROOM where one of them is lower than the palm is thick (the razor, held only by a palm
+    pitched down over it), as much as they leave spread evenly where they do not (the shower's corner shelf), never
+    under SPOT_GAP."""
     import itertools
     import math
 
     from homer_sim.home.catalog import CATALOG
     from homer_sim.home.furniture import furniture_geometry
-    from homer_sim.home.placement import ROW_GAP, SPOT_GAP, inside_side_gap, lengthwise, start_poses
+    from homer_sim.home.placement import PALM_ROOM, ROW_GAP, SPOT_GAP, inside_side_gap, lengthwise, start_poses
+    from homer_sim.robot_spec import ROBOT
 
     layout = default_layout()
     poses = start_poses(layout)
     furniture = layout.furniture_by_name()
-    checked = 0
+    checked, palm = 0, 0
     for f in layout.furniture:
         for level, place in enumerate(furniture_geometry(f).places):
             objects = [o for o in layout.objects if o.parent == f.name and o.level == level]
             if place.relation != INSIDE or place.part is not None or len(objects) < 2:
                 continue
             gap = inside_side_gap(layout, f, level, place)
-            assert SPOT_GAP <= gap <= ROW_GAP
+            low = any(CATALOG[o.cls].size[2] < 2 * ROBOT.palm_half_size[2] for o in objects)
+            assert SPOT_GAP <= gap <= (PALM_ROOM if low else ROW_GAP)
             c, s = math.cos(furniture[f.name].yaw), math.sin(furniture[f.name].yaw)
             boxes = []  # (from, to) across the cabinet's width, (from, to) along its depth
             for o in objects:
@@ -136,7 +139,9 @@ def test_neighbours_reached_from_the_front_leave_a_finger_between_them() -> None
                 if a[2] < b[3] and b[2] < a[3]:  # side by side in one row
                     assert max(b[0] - a[1], a[0] - b[1]) >= gap - 1e-6, (f.name, level)
             checked += gap >= ROW_GAP - 1e-9
+            palm += low and gap >= PALM_ROOM - 1e-9
     assert checked >= 3  # the fridge's, the bathroom cabinet's shelves have room for a finger
+    assert palm >= 2  # the bathroom cabinet's razor and soap shelves have room for the palm, 18 cm wide
 
 
 def test_an_open_door_blocks_the_furniture_it_stands_in_front_of() -> None:
