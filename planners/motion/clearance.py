@@ -4,6 +4,8 @@
 from __future__ import annotations
 
 import copy
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import mujoco
@@ -159,6 +161,17 @@ class ClearanceCheck:
 
         return pressed(np.asarray(shift, dtype=float)) - pressed(np.zeros(3))
 
+    @contextmanager
+    def keeping(self, margin: float) -> Iterator[None]:
+        """Within it, `clear` fails a configuration where a robot geom comes within `margin` m (at most MARGIN) of
+        the apartment: the copy's robot geoms get that contact margin (outside it they have none, see the class
+        doc)."""
+        saved = self.model.geom_margin[self.robot].copy()
+        self.model.geom_margin[self.robot] = min(margin, self.MARGIN)
+        try:
+            yield
+        finally:
+            self.model.geom_margin[self.robot] = saved
 
     def _collide(self, geoms) -> None:
         """mj_collision on the scratch data, an object's `geoms` (ids) colliding with the rest as well as with the

@@ -43,6 +43,7 @@ NO_UP_FAMILIES = ("cloth", "sphere")  # shapes that lie as well one way as anoth
 CARRY_SLIP = 0.03  # m the held object may shift in the hand on the way into a shelf before it no longer goes in
 # as planned (one that moved more while carried, the fingers met, fell out), and on the way above a spot before it is
 # aimed again (`_lower_onto`)
+WAY_MARGIN = 0.005  # m the arm keeps from the apartment on the way a held object is lowered along, where one does
 UPRIGHT_TURN = math.radians(3.0)  # rad a held object hangs tilted at least before a lowering turns it upright
 TOP_SPOTS = 4  # free spots on an open top tried for a place (the first one no way down is blocked to),
 TOP_SPOT_GAP = 0.08  # m apart at least,
@@ -103,11 +104,7 @@ class Place:
             failure, short = self._carry_to(name, node, target)
             if failure is not None:
                 return failure
-            outcome = None if short else self._lower_checked(name, node, target)
-            if outcome is None and not short:  # no clear way down from here: from a base pose chosen for it
-                outcome = self._lower_driven(name, node, target)
-            if outcome is None:  # no clear way down from any: straight down from above the spot, unchecked
-                outcome = self._lower_onto(name, node, target, short)
+            outcome = self._lower(name, node, target, short)
             if outcome.success or self.arm.held is None:
                 return outcome
             failures.append(outcome.reason.removeprefix("place: "))
@@ -177,10 +174,7 @@ class Place:
             failure, short = self._carry_to(name, anchor, target)
             if failure is not None:
                 return failure
-            outcome = None if short else self._lower_checked(name, node, target)
-            if outcome is None and not short:
-                outcome = self._lower_driven(name, node, target)
-            return outcome if outcome is not None else self._lower_onto(name, node, target, short)
+            return self._lower(name, node, target, short)
         held_at = self.arm.held_offset(name)
         try:
             self.navigator.drive_to(self.navigator.stand_near(tuple(target[:2])), self.arm.carry(),
@@ -381,21 +375,38 @@ class Place:
         return np.concatenate([g2[(model.geom_bodyid[g1] == body) & ~robot[g2]],
                                g1[(model.geom_bodyid[g2] == body) & ~robot[g1]]])
 
-    def _lower_checked(self, name: str, node: str, target: np.ndarray) -> SkillResult | None:
+    def _lower(self, name: str, node: str, target: np.ndarray, short: bool) -> SkillResult:
+        """Lower the held `name` onto `target` (m, a spot on `node`) after a carry that stopped `short` or not: along
+        a checked way from where the robot stands (`_lower_checked`), else from a base pose chosen for it
+        (`_lower_driven`), each first on a way whose arm keeps WAY_MARGIN from the apartment, then on one that only
+        touches nothing (the arm trails its planned way: a palm planned 0.1 mm past a knife block beside a cutting
+        board struck it, and letting go knocked the block off the counter); where there is none, or the carry
+        stopped short, straight down from above the spot, unchecked (`_lower_onto`)."""
+        if not short:
+            for margin in (WAY_MARGIN, 0.0):
+                outcome = self._lower_checked(name, node, target, margin)
+                if outcome is None:
+                    outcome = self._lower_driven(name, node, target, margin)
+                if outcome is not None:
+                    return outcome
+        return self._lower_onto(name, node, target, short)
+
+    def _lower_checked(self, name: str, node: str, target: np.ndarray, margin: float = 0.0) -> SkillResult | None:
         """Lower the held `name` onto `target` (m, a spot on furniture `node`) from where the robot stands, the
         base kept there, along a way (eased to APPROACH m above the spot, then straight down, the object as it
-        hangs in the hand, stood up where it tilted: `_lowering_rotations`) that keeps the arm and the object clear
-        of the apartment; let go and retreat. None (nothing moved) where no such way is found."""
+        hangs in the hand, stood up where it tilted: `_lowering_rotations`) that keeps the arm `margin` m from the
+        apartment and the object clear of it; let go and retreat. None (nothing moved) where no such way is found."""
         held = self.arm.held_object(name)
         for rotation in self._lowering_rotations(name):
             quat = matrix_to_quat(rotation)
             release = target + np.array([0.0, 0.0, 0.01]) - rotation @ held.position
             above = release + np.array([0.0, 0.0, APPROACH])
-            start = self.ik.solve(self.controller.target, above, quat, base_cost=ARC_BASE_COST)
-            if not start.converged or not self.clearance.clear(start.q, held=held):
-                continue
-            path = self.arm.checked_line(start.q, [above, release], quat, held)
-            ease = None if path is None else self._ease_path(self.controller.target, start.q, held)
+            with self.clearance.keeping(margin):
+                start = self.ik.solve(self.controller.target, above, quat, base_cost=ARC_BASE_COST)
+                if not start.converged or not self.clearance.clear(start.q, held=held):
+                    continue
+                path = self.arm.checked_line(start.q, [above, release], quat, held)
+                ease = None if path is None else self._ease_path(self.controller.target, start.q, held)
             if ease is None:
                 continue
             self._ease_to(ease, start.q)
@@ -404,7 +415,7 @@ class Place:
             return self._release_on(name, node, target, release, quat)
         return None
 
-    def _lower_driven(self, name: str, node: str, target: np.ndarray) -> SkillResult | None:
+    def _lower_driven(self, name: str, node: str, target: np.ndarray, margin: float = 0.0) -> SkillResult | None:
         """`_lower_checked` from a base pose chosen for the lowering (`_drive_for`: the object eases from the carry
         posture to APPROACH m above `target` and comes straight down, the arm and the object clear of the apartment
         all the way), for where the carry stopped too far off to reach the spot that way (moved over the spot
@@ -424,7 +435,8 @@ class Place:
             for turn in turns:
                 turned = yaw_matrix(turn) @ rotation
                 release = target + np.array([0.0, 0.0, 0.01]) - turned @ held.position
-                planned = self._drive_for([release + np.array([0.0, 0.0, APPROACH]), release], turned, posture, held)
+                planned = self._drive_for([release + np.array([0.0, 0.0, APPROACH]), release], turned, posture, held,
+                                          margin)
                 if planned is None:
                     continue
                 ease, path = planned
@@ -638,13 +650,13 @@ class Place:
         self.controller.move_through([q], duration=EASE_SLOWDOWN * self.controller.duration(self.controller.target, q))
         self.controller.settle(0.003)
 
-    def _drive_for(self, points: list[np.ndarray], rotation: np.ndarray, posture: np.ndarray, held: Held
-                   ) -> tuple[list[np.ndarray], list[np.ndarray]] | None:
+    def _drive_for(self, points: list[np.ndarray], rotation: np.ndarray, posture: np.ndarray, held: Held,
+                   margin: float = 0.0) -> tuple[list[np.ndarray], list[np.ndarray]] | None:
         """Drive, holding `held` in `posture` (shape (13,)), to a free base pose from which the held object eases
         from `posture` onto the first of `points` (m, each shape (3,)) and the grip site follows them at `rotation`
-        (shape (3, 3)), the object and the arm clear of the apartment all the way; returns (the ease, see
-        `_ease_path`; the configurations along `points`), each configuration shape (13,), or None (the robot
-        stays)."""
+        (shape (3, 3)), the object clear of the apartment all the way and the arm `margin` m off it; returns (the
+        ease, see `_ease_path`; the configurations along `points`), each configuration shape (13,), or None (the
+        robot stays)."""
         quat = matrix_to_quat(rotation)
         reach = self.arm.held_reach()
         obstacles = self.navigator.obstacles()
@@ -654,15 +666,16 @@ class Place:
                 continue
             q = posture.copy()
             q[:3] = base
-            start = self.ik.solve(q, points[0], quat, base_cost=ARC_BASE_COST)
-            if not start.converged or not self.clearance.clear(start.q, held=held):
-                continue
-            path = self.arm.checked_line(start.q, points, quat, held)
-            if path is None:
-                continue
-            carried = posture.copy()
-            carried[:3] = base
-            ease = self._ease_path(carried, start.q, held)
+            with self.clearance.keeping(margin):
+                start = self.ik.solve(q, points[0], quat, base_cost=ARC_BASE_COST)
+                if not start.converged or not self.clearance.clear(start.q, held=held):
+                    continue
+                path = self.arm.checked_line(start.q, points, quat, held)
+                if path is None:
+                    continue
+                carried = posture.copy()
+                carried[:3] = base
+                ease = self._ease_path(carried, start.q, held)
             if ease is None:
                 continue
             try:
