@@ -36,9 +36,10 @@ class ClearanceCheck:
     nothing. With a held object, the fingers are checked too, and the object must touch nothing but the robot.
     The model's geom margins are 0, so mj_collision reports overlaps only: a contact closer than MARGIN counts,
     but none is reported short of touching, and a planned move may pass a neighbour at no distance (the arm's
-    tracking lag mid-swing then makes it strike). Giving the check's robot geoms a contact margin of MARGIN was
-    tried: an arm's swing no longer swept a radio off a tv stand, but a vegetable carried from a cutting board
-    to the fridge then knocked an egg 5.5 cm, so it is not in.
+    tracking lag mid-swing then makes it strike). Giving the check's robot geoms a contact margin of MARGIN for
+    every check was tried: an arm's swing no longer swept a radio off a tv stand, but a vegetable carried from a
+    cutting board to the fridge then knocked an egg 5.5 cm, so it is not in; a caller may ask for a margin where
+    it plans (`keeping`: the ways a held object is lowered along).
 
     Collisions run on a copy of the model whose filter keeps only the pairs a check reads (robot or held object
     against the rest): apartment geoms lose their conaffinity, so the ~100 resting objects and the furniture are
@@ -86,11 +87,11 @@ class ClearanceCheck:
 
     def clear(self, q: np.ndarray, articulation=None, value: float = 0.0, held: Held | None = None,
               fingers: bool = False, riders: tuple[int, ...] = ()) -> bool:
-        """True if configuration q (shape (13,)) keeps MARGIN from the apartment, with `articulation` (if
-        given) at joint value `value` (rad or m), `held` (if given) in the hand, and everything else where it
-        is now, but the objects whose free joints' qpos addresses are `riders` (in a drawer being moved): they
-        move with the drawer. With `fingers`, the fingers are checked too (a hand swinging free touches nothing
-        at all)."""
+        """True if configuration q (shape (13,)) touches nothing in the apartment (within `keeping`, the robot
+        comes no closer than its margin), with `articulation` (if given) at joint value `value` (rad or m), `held`
+        (if given) in the hand, and everything else where it is now, but the objects whose free joints' qpos
+        addresses are `riders` (in a drawer being moved): they move with the drawer. With `fingers`, the fingers
+        are checked too (a hand swinging free touches nothing at all)."""
         d = self.scratch
         d.qpos[:] = self.world.data.qpos
         d.qpos[self.qpos_adr] = q
