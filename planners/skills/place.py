@@ -43,7 +43,8 @@ NO_UP_FAMILIES = ("cloth", "sphere")  # shapes that lie as well one way as anoth
 CARRY_SLIP = 0.03  # m the held object may shift in the hand on the way into a shelf before it no longer goes in
 # as planned (one that moved more while carried, the fingers met, fell out), and on the way above a spot before it is
 # aimed again (`_lower_onto`)
-WAY_MARGIN = 0.005  # m the arm keeps from the apartment on the way a held object is lowered along, where one does
+WAY_MARGIN = 0.005  # m the arm keeps from the apartment on the way down a held object is lowered along, where there
+# is such a way (else one that touches nothing; see `Place._lower`)
 UPRIGHT_TURN = math.radians(3.0)  # rad a held object hangs tilted at least before a lowering turns it upright
 TOP_SPOTS = 4  # free spots on an open top tried for a place (the first one no way down is blocked to),
 TOP_SPOT_GAP = 0.08  # m apart at least,
