@@ -25,7 +25,7 @@ ROW_GAP = 0.065  # m between rows on an open top at the start: a finger (3.2 cm)
 # a dish rack left no room for the finger between them)
 PALM_ROOM = ROBOT.palm_half_size[1]  # m beside each object on a shelf holding one lower than the palm is thick:
 # such an object is held only by a palm pitched down over it, 18 cm wide along the finger travel, which passes
-# between two neighbours this far either side of any object (a razor 6.5 cm from a painkillers box and a shaving
+# between two neighbours this far either side of any object (a razor 6.5 cm from a painkillers bottle and a shaving
 # cream can, 17.5 cm apart, was out of the hand's reach)
 SPAWN_LIFT = 0.001  # m above the surface an object is spawned
 
