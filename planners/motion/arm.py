@@ -21,6 +21,7 @@ from planners.motion.clearance import ARC_BASE_COST, ClearanceCheck, Held
 from planners.motion.control import CARRY_MOTION, FREE_MOTION, Controller
 from planners.motion.ik import IKResult, IKSolver
 from planners.motion.navigation import CLEARANCE, Navigator, base_candidates
+from planners.motion.swing import plan_swing
 
 MIN_HELD_OPENING = 0.001  # m per finger: closed further means the fingers missed
 GRASP_BASE_COST = 100.0  # IK damping on the base while grasping
@@ -78,6 +79,8 @@ class Arm:
         self.shoulder_lift = ik.model.joint("shoulder_lift").qposadr[0]
         self.held: str | None = None
         self.folded = True
+        self.lower, self.upper = np.zeros(ik.model.nq), np.zeros(ik.model.nq)  # joint ranges, by qpos address
+        self.lower[ik.model.jnt_qposadr], self.upper[ik.model.jnt_qposadr] = ik.model.jnt_range.T
 
     def solve(self, position: np.ndarray, rotation_quat: np.ndarray, seeds: bool = True) -> IKResult:
         """IK onto a grip-site pose (m; wxyz) from the controller's target, the base damped as while grasping."""
@@ -162,12 +165,18 @@ class Arm:
         self.folded = True
 
     def _swing_via(self, q_from: np.ndarray, q_to: np.ndarray) -> list[np.ndarray]:
-        """Where the joint-space swing q_from -> q_to (each shape (13,)) touches something: the first configuration
-        with one, then two of the torso and arm joints at q_to's values and the others at q_from's through which the
-        two swings are clear, as a one-element list; else (or where the straight swing is clear) none. A hand that
-        let a glass go on a counter, its wrist and upper arm turned far from the raised arm's, swept the knife block
-        beside the glass off the counter on the straight swing, however high it first rose."""
-        held = None if self.held is None else self.held_object(self.held)
+        """`swing_way` from q_from to q_to with what the hand holds; none where it finds no way."""
+        return self.swing_way(q_from, q_to, None if self.held is None else self.held_object(self.held)) or []
+
+    def swing_way(self, q_from: np.ndarray, q_to: np.ndarray, held: Held | None = None) -> list[np.ndarray] | None:
+        """The configurations (each shape (13,)) strictly between q_from and q_to (base at q_to's) of a joint-space
+        way on which the arm, the fingers and `held` touch nothing: none where the straight swing is clear; else
+        the first configuration with one, then two of the torso and arm joints at q_to's values and the others at
+        q_from's through which the two swings are clear (a hand that let a glass go on a counter, its wrist and
+        upper arm turned far from the raised arm's, swept the knife block beside the glass off the counter on the
+        straight swing, however high it first rose); else one found by `plan_swing` over the joints' ranges (a
+        pot held pitched, eased from the carry point down to a kitchen cabinet's shelf, swung its handle through
+        the cabinet's open door on every straight way); None where there is none of those."""
         if self.swing_clear(q_from, q_to, held):
             return []
         joints = range(3, self.controller.n_body)
@@ -176,7 +185,9 @@ class Arm:
             via[list(subset)] = q_to[list(subset)]
             if self.swing_clear(q_from, via, held) and self.swing_clear(via, q_to, held):
                 return [via]
-        return []
+        arm = slice(3, self.controller.n_body)
+        return plan_swing(q_from, q_to, lambda a, b: self.swing_clear(a, b, held), self.lower[arm], self.upper[arm],
+                          arm)
 
     def _rise_to_swing(self) -> None:
         """Where the joint-space swing into `raised` would touch something, first move the hand straight up, every
@@ -356,12 +367,12 @@ class Arm:
 
     def swing_clear(self, q_from: np.ndarray, q_to: np.ndarray, held: Held | None = None) -> bool:
         """Whether the joint-space move q_from -> q_to (each shape (13,), base at q_to's) keeps the arm, the
-        fingers (they swing free) and `held`, an object in the hand, clear, checked every SWING_STEP rad of the
-        largest joint change."""
+        fingers (they swing free) and `held`, an object in the hand, clear (of the robot too, but its hand),
+        checked every SWING_STEP rad of the largest joint change."""
         q_from = q_from.copy()
         q_from[:3] = q_to[:3]
         steps = max(1, int(np.ceil(np.max(np.abs(q_to[3:11] - q_from[3:11])) / SWING_STEP)))
-        return all(self.clearance.clear(q_from + s * (q_to - q_from), held=held, fingers=True)
+        return all(self.clearance.clear(q_from + s * (q_to - q_from), held=held, fingers=True, itself=True)
                    for s in np.linspace(0.0, 1.0, steps + 1)[1:])
 
     def checked_line(self, q: np.ndarray, points: list[np.ndarray], quat: np.ndarray, held: Held | None = None

@@ -60,6 +60,14 @@ class ClearanceCheck:
         self.fingers = np.zeros(world.model.ngeom, dtype=bool)
         self.fingers[fingers] = True
         self.checked = self.robot & ~self.fingers
+        hand = world.model.body(PREFIX + "wrist_flex_link").id  # the wrist, the gripper and the fingers below it
+        in_hand = np.zeros(world.model.nbody, dtype=bool)
+        for body in range(world.model.nbody):
+            b = body
+            while b and b != hand:
+                b = world.model.body_parentid[b]
+            in_hand[body] = b == hand
+        self.arm_body = self.robot & ~in_hand[world.model.geom_bodyid]  # the base, torso and arm up to the wrist
         self.conaffinity = world.model.geom_conaffinity.copy()
         self.model.geom_conaffinity[~self.robot] = 0
         assert _same_filter(world.model, self.robot), "the robot-only collision filter would drop pairs"
@@ -86,12 +94,14 @@ class ClearanceCheck:
         return {int(g) for g in np.concatenate([g1[touching], g2[touching]]) if not self.robot[g]}
 
     def clear(self, q: np.ndarray, articulation=None, value: float = 0.0, held: Held | None = None,
-              fingers: bool = False, riders: tuple[int, ...] = ()) -> bool:
+              fingers: bool = False, riders: tuple[int, ...] = (), itself: bool = False) -> bool:
         """True if configuration q (shape (13,)) touches nothing in the apartment (within `keeping`, the robot
         comes no closer than its margin), with `articulation` (if given) at joint value `value` (rad or m), `held`
         (if given) in the hand, and everything else where it is now, but the objects whose free joints' qpos
         addresses are `riders` (in a drawer being moved): they move with the drawer. With `fingers`, the fingers
-        are checked too (a hand swinging free touches nothing at all)."""
+        are checked too (a hand swinging free touches nothing at all). With `itself`, `held` must not touch the
+        robot either, but for its hand (from the wrist on, which holds it): a joint-space way planned over the
+        joints' ranges swung a pot in the hand into the robot's base, and it fell out."""
         d = self.scratch
         d.qpos[:] = self.world.data.qpos
         d.qpos[self.qpos_adr] = q
@@ -117,8 +127,12 @@ class ClearanceCheck:
             robot[geoms] = True
             self._collide(geoms)
         g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
-        touching = (checked[g1] != checked[g2]) & ~(robot[g1] & robot[g2]) & (d.contact.dist[: d.ncon] < self.MARGIN)
-        return not touching.any()
+        touching = (checked[g1] != checked[g2]) & ~(robot[g1] & robot[g2])
+        if itself and held is not None:
+            own = np.zeros_like(robot)
+            own[list(held.geoms)] = True
+            touching |= (own[g1] & self.arm_body[g2]) | (own[g2] & self.arm_body[g1])
+        return not (touching & (d.contact.dist[: d.ncon] < self.MARGIN)).any()
 
     def bodies_struck(self, q: np.ndarray, held: Held, bodies: frozenset[int], margin: float = 0.0) -> set[int]:
         """Of `bodies` (body ids), those a robot geom other than a finger, or the `held` object, comes within

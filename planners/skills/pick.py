@@ -9,6 +9,7 @@ retried from the next candidate. Movement comes from `planners.motion.arm`.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -70,10 +71,12 @@ DESCENT_DRIFT = 0.005  # m a loose waypoint of the descent onto a grasp may stra
 
 class Pick:
     """The `pick` skill: grasps an object with the `arm` and lifts it; `observer` reads where the object stands,
-    `spots` the furniture's places."""
+    `spots` the furniture's places, `takes` (`Place.takes`) whether a shelf takes it as a grasp would hold it."""
 
-    def __init__(self, arm: Arm, observer: SceneGraphObserver, spots: Spots) -> None:
+    def __init__(self, arm: Arm, observer: SceneGraphObserver, spots: Spots,
+                 takes: Callable[[str, str, np.ndarray, Held], bool] | None = None) -> None:
         self.arm = arm
+        self.takes = takes  # (object, furniture, grip rotation, held) -> whether a shelf of it takes it so held
         self.observer = observer
         self.spots = spots
         self.world, self.controller, self.navigator = arm.world, arm.controller, arm.navigator
@@ -168,23 +171,23 @@ class Pick:
                 stand = np.array(self.navigator.stand_pose(node, tuple(position[:2]))[:2])
             except NavigationError as error:
                 return SkillResult(False, f"{name}: {error}")
-            outcome = self._pick_side_first(name, node, cls, position, quat, stand, failures)
+            outcome = self._pick_side_first(name, node, cls, position, quat, stand, failures, into)
             if outcome is not None:
                 return outcome
         return self._pick_from_above(name, node, cls, position, quat, failures)
 
     def _pick_side_first(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
-                         stand: np.ndarray, failures: list[str]) -> SkillResult | None:
-        """Pick `name` (at `position`, m; body `quat`, wxyz) from furniture `node`'s open top as a shelf takes
-        it (see `_pick_from_shelf` with `out`), from each of its sides that faces `stand` (the xy, m, where the
-        robot would stand), nearest first; the successful outcome (or the failure that knocked it over), or None
-        with each side's failure added to `failures`."""
+                         stand: np.ndarray, failures: list[str], into: str) -> SkillResult | None:
+        """Pick `name` (at `position`, m; body `quat`, wxyz) from furniture `node`'s open top as a shelf of
+        `into` takes it (see `_pick_from_shelf` with `out`), from each of its sides that faces `stand` (the xy, m,
+        where the robot would stand), nearest first; the successful outcome (or the failure that knocked it over),
+        or None with each side's failure added to `failures`."""
         toward = (stand - position[:2]) / max(float(np.linalg.norm(stand - position[:2])), 1e-9)
         yaw = 2.0 * math.atan2(quat[3], quat[0])
         axes = [np.array([math.cos(yaw + a), math.sin(yaw + a)]) for a in np.arange(4) * math.pi / 2]
         for out in sorted(axes, key=lambda a: -float(a @ toward)):  # the object's sides, nearest side first
             if out @ toward > -0.5:
-                outcome = self._pick_from_shelf(name, node, cls, position, quat, out)
+                outcome = self._pick_from_shelf(name, node, cls, position, quat, out, into=into)
                 if outcome.success or self.arm.fallen_over(name):  # knocked over: the other sides' grasps and
                     return outcome  # those from above were made for it standing (see `_knocked_over`)
                 failures.append(outcome.reason.removeprefix(f"{name}: "))
@@ -324,15 +327,16 @@ class Pick:
         return self._names(touched & objects)
 
     def _pick_from_shelf(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
-                         out: np.ndarray | None = None, replan: bool = True) -> SkillResult:
+                         out: np.ndarray | None = None, replan: bool = True, into: str | None = None
+                         ) -> SkillResult:
         """Pick `name` from a shelf inside cabinet `node`: each grasp of `shelf_grasps` in turn, from a base
         pose where the arm clears the compartment; the object lifted SIDE_LIFT m (over what stands in front of it,
         `rise_to_pass`, and over a basin's rim, `_rim_rise`), drawn out, then raised.
-        With `out` (a horizontal unit vector, shape (2,)), from an open top instead, for a shelf next: the grasps a
-        shelf takes (side grasps, the fingers as deep on the object as they reach, then pitched ones), approached
-        against `out`. With `replan`, once a failed grasp has moved the object (see `disturbed`), the grasps are
-        planned again for where it now stands (the others were for where it stood)."""
-        grasps, out, front = self._shelf_candidates(name, node, cls, position, quat, out)
+        With `out` (a horizontal unit vector, shape (2,)), from an open top instead, for a shelf of `into` next: the
+        grasps it takes, approached against `out` (see `_shelf_candidates`). With `replan`, once a failed grasp has
+        moved the object (see `disturbed`), the grasps are planned again for where it now stands (the others were
+        for where it stood)."""
+        grasps, out, front = self._shelf_candidates(name, node, cls, position, quat, out, into)
         # over what stands in front of it on its shelf, or, on an open top, within the SIDE_PULL it is drawn out (a
         # cereal box drawn out low across the dining table took the bowl in front of it along, 80 cm); and over
         # the furniture's own rim in front of its place (a canister of wipes drawn out of the bathroom sink's basin
@@ -369,7 +373,7 @@ class Pick:
                 return knocked
             now = self.world.object_pose(name)
             if replan and disturbed(position, quat, *now):
-                again = self._pick_from_shelf(name, node, cls, *now, out, replan=False)
+                again = self._pick_from_shelf(name, node, cls, *now, out, replan=False, into=into)
                 return again if again.success else SkillResult(False, f"{again.reason} (moved by {failures})")
         if unreachable:
             failures.append(f"{', '.join(map(str, unreachable))}: no free base pose reaches the grasp without the arm "
@@ -393,20 +397,23 @@ class Pick:
                     grasp.rotation.T @ self.world.data.xmat[body].reshape(3, 3))
 
     def _shelf_candidates(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
-                          out: np.ndarray | None) -> tuple[list[Grasp], np.ndarray, float]:
+                          out: np.ndarray | None, into: str | None = None) -> tuple[list[Grasp], np.ndarray, float]:
         """(grasps, out, front) for `_pick_from_shelf`: without `out`, the grasps of `name` inside cabinet `node`
         approached against its front normal (`out`, shape (2,)), the front plane `front` m out from the object,
-        the palm clear of its neighbours; with `out`, those a shelf takes next (level, then pitched: a hand
-        pointing straight down, holding the object front to back or leaning aside does not put it down under a
-        shelf), approached against `out` from anywhere (`front` -inf)."""
+        the palm clear of its neighbours; with `out`, approached against `out` from anywhere (`front` -inf), those a
+        shelf of `into` takes (`takes`) first, of all grasps (a pot goes into a kitchen cabinet held from above,
+        not pitched), then the others of those a shelf takes as a rule (level, then pitched: a hand pointing
+        straight down, holding the object front to back or leaning aside does not put it down under a shelf)."""
         if out is None:
             furniture = self.navigator.furniture[node]
             out = self.navigator.front_normal(node)
             front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
             return shelf_grasps(cls, position, quat, out, front, neighbour_footprints(self.world, name)), out, front
-        grasps = [g for g in shelf_grasps(cls, position, quat, out, -np.inf)
-                  if g.kind.pitch != 90 and not g.kind.along and not g.kind.roll]
-        return grasps, out, -np.inf
+        grasps = shelf_grasps(cls, position, quat, out, -np.inf)
+        taken = [] if self.takes is None or into is None else [
+            g for g in grasps if self.takes(name, into, g.rotation, self._held_by(name, g))]
+        return taken + [g for g in grasps if g.kind.pitch != 90 and not g.kind.along and not g.kind.roll
+                        and all(g is not t for t in taken)], out, -np.inf
 
     def _try_grasp(self, name: str, grasp: Grasp, pull: np.ndarray | None = None,
                    path_in: list[np.ndarray] | None = None, first_lift: float = SIDE_LIFT, drawn: float = SIDE_PULL

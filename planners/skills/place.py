@@ -58,6 +58,7 @@ DROP_INTO = 0.02  # m over a bin's rim a thing with no up (cloth) is let go to d
 SHELF_SPOTS = 6  # free spots tried for a place inside, nearest the front first, then half as many on each other
 # shelf (rack),
 SHELF_SPOT_GAP = 0.05  # m apart at least
+SHELF_TAKES = 3  # of those, the spots a grasp being chosen for a shelf is checked against (`Place.takes`)
 EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
 RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to let go (inside a shelf)
 TOP_RELEASE_OPENING = 0.05  # m per finger the fingers open at least to let go on an open top
@@ -537,10 +538,42 @@ class Place:
     def _place_in_shelf(self, name: str, node: str, places: list[int]) -> SkillResult:
         """Put the held object on a shelf inside cabinet `node` (`places`: its shelf indices), the reverse of
         `_pick_from_shelf`: from a base pose where the object and the arm clear the cabinet and its contents, in
-        SIDE_LIFT m (or over what stands in front of it, `rise_to_pass`) above a free spot (spots nearest the
-        front first, then those of each shelf none of those is on), down, release, and out the way it went in."""
-        index = self.world.object_index(name)
-        size = np.asarray(CATALOG[self.world.layout.objects[index].cls].size)
+        SIDE_LIFT m (or over what stands in front of it, `rise_to_pass`) above a free spot (`_shelf_ways`), down,
+        release, and out the way it went in."""
+        posture, held = self.arm.carry(), self.arm.held_object(name)
+        ways = self._shelf_ways(name, node, places, self.world.data.site("robot/grip").xmat.reshape(3, 3), held)
+        if not ways:
+            return SkillResult(False, f"place: no free spot for {name} inside {node}")
+        for spot, rotation, release, outside, over in ways:
+            up = np.array([0.0, 0.0, over])
+            planned = self._drive_for([outside + up, release + up, release], rotation, posture, held)
+            if planned is not None:
+                return self._go_in(name, node, spot, rotation, held, planned, release, outside, over)
+        return SkillResult(False, f"place: no free base pose puts {name} into {node} without it or the arm "
+                                  f"touching {node} or its contents ({len(ways)} spots tried)")
+
+    def takes(self, name: str, node: str, grip: np.ndarray, held: Held) -> bool:
+        """Whether a shelf inside `node` (or a level under another, `covered_places`) takes `name` held as `held`
+        at grip rotation `grip` (shape (3, 3)): as a grasp being chosen for it would hold it, put in as
+        `_place_in_shelf` puts it, from a free base pose at one of SHELF_TAKES of its spots (the way from the
+        carry posture, which that grasp has not reached yet, is not checked). A pot held pitched from the front,
+        picked off the stove for a kitchen cabinet, met the shelf above with its wrist at every spot; held from
+        above, as it is picked from there, it goes in."""
+        places = shelves_inside(self.spots, self.navigator.furniture.get(node), node, None) or covered_places(
+            self.spots, node, None)
+        q = self.controller.target
+        for _, rotation, release, outside, over in self._shelf_ways(name, node, places, grip, held)[:SHELF_TAKES]:
+            up = np.array([0.0, 0.0, over])
+            if next(self._plan_for([outside + up, release + up, release], rotation, q, held, ease=False), None):
+                return True
+        return False
+
+    def _shelf_ways(self, name: str, node: str, places: list[int], grip: np.ndarray, held: Held) -> list[tuple]:
+        """The ways into the shelves `places` of cabinet `node` for `name`, held as `held` at grip rotation `grip`
+        (shape (3, 3)): (spot, m; the grip rotation it goes in at, `_into_shelf`; the grip site at the release,
+        m; out of the front at that height, m; the height above the release it goes in at, m), a free spot each,
+        nearest the front first, then those of each shelf none of those is on."""
+        size = np.asarray(self.world.object_class(name).size)
         furniture = self.navigator.furniture[node]
         out = self.navigator.front_normal(node)
         front = np.array(furniture.pos) + out * furniture.size[1] / 2
@@ -551,27 +584,20 @@ class Place:
         missed = [k for k in places if all(on[id(spot)] != k for spot in spots)]  # shelves (racks) under the others'
         spots += [spot for k in missed for spot in _spread([s for s, at in drawn if at == k], SHELF_SPOT_GAP,
                                                            SHELF_SPOTS // 2)]
-        if not spots:
-            return SkillResult(False, f"place: no free spot for {name} inside {node}")
-        posture, held = self.arm.carry(), self.arm.held_object(name)
-        rotation = self._into_shelf(out)
-        up, pull = np.array([0.0, 0.0, 1.0]), np.array([out[0], out[1], 0.0])
+        rotation = self._into_shelf(out, grip)
+        pull = np.array([out[0], out[1], 0.0])
         clear_out = np.linalg.norm(size) / 2 + ENTRY_OUT  # the object's centre this far out of the front: all out
+        ways = []
         for spot in spots:
             release = np.array(spot.pos) + np.array([0.0, 0.0, 0.01]) - rotation @ held.position
             outside = release + (float(np.dot(front - release[:2], out)) + clear_out) * pull
             over = max(SIDE_LIFT, rise_to_pass(self.world, name, np.array(spot.pos), out,
                                                float(np.dot(front - np.array(spot.pos[:2]), out))))
-            points = [outside + over * up, release + over * up, release]
-            planned = self._drive_for(points, rotation, posture, held)
-            if planned is None:
-                continue
-            return self._go_in(name, node, np.array(spot.pos), rotation, held, planned, release, outside, over)
-        return SkillResult(False, f"place: no free base pose puts {name} into {node} without it or the arm "
-                                  f"touching {node} or its contents ({len(spots)} spots tried)")
+            ways.append((np.array(spot.pos), rotation, release, outside, over))
+        return ways
 
     def _go_in(self, name: str, node: str, spot: np.ndarray, rotation: np.ndarray, held: Held,
-               planned: tuple[list[np.ndarray], list[np.ndarray]], release: np.ndarray, outside: np.ndarray,
+               planned: tuple[tuple, list[np.ndarray]], release: np.ndarray, outside: np.ndarray,
                over: float = SIDE_LIFT) -> SkillResult:
         """Carry `held` (`name`) into cabinet `node` along `planned` (from `_drive_for`) and let it go on the
         shelf at `spot` (m): eased in `over` m above the shelf, aimed again where it turned in the fingers on the
@@ -623,46 +649,66 @@ class Place:
         out = line(release + lift, outside + lift, seed=up[-1])
         return up + out if out is not None else up
 
-    def _into_shelf(self, out: np.ndarray) -> np.ndarray:
+    def _into_shelf(self, out: np.ndarray, grip: np.ndarray) -> np.ndarray:
         """The grip rotation (shape (3, 3)) that carries the held object into a shelf whose front faces `out`
-        (shape (2,)): the hand's now, turned about the vertical; a hand held level or pitched then points into the
-        shelf (a pitched hand leaning aside meets the shelf's side wall), one pointing down keeps its turn relative
-        to the base, the base facing the shelf."""
-        now = self.world.data.site("robot/grip").xmat.reshape(3, 3)
-        pitched = np.linalg.norm(now[:2, 0]) > PITCHED_HAND
-        turn = math.atan2(-out[1], -out[0]) - (math.atan2(now[1, 0], now[0, 0]) if pitched else
+        (shape (2,)): `grip` (the hand's, shape (3, 3)) turned about the vertical; a hand held level or pitched
+        then points into the shelf (a pitched hand leaning aside meets the shelf's side wall), one pointing down
+        keeps its turn relative to the base, the base facing the shelf."""
+        pitched = np.linalg.norm(grip[:2, 0]) > PITCHED_HAND
+        turn = math.atan2(-out[1], -out[0]) - (math.atan2(grip[1, 0], grip[0, 0]) if pitched else
                                                self.controller.target[2])
-        return yaw_matrix(turn) @ now
+        return yaw_matrix(turn) @ grip
 
-    def _ease_path(self, q_from: np.ndarray, q_to: np.ndarray, held: Held) -> list[np.ndarray] | None:
-        """The way (configurations, each shape (13,)) of a held object from configuration q_from to q_to: along a
-        straight grip line as far as it is reachable, the rest in joint space; None if any of it touches anything.
-        """
+    def _ease_path(self, q_from: np.ndarray, q_to: np.ndarray, held: Held
+                   ) -> tuple[list[np.ndarray], list[np.ndarray]] | None:
+        """The way of a held object from configuration q_from to q_to (shape (13,)): (along a straight grip line as
+        far as it is reachable; the configurations between there and q_to of a clear joint-space way,
+        `Arm.swing_way`), each configuration shape (13,); None if the line touches anything or no clear swing is
+        found."""
         lead = self.arm.hand_line(*self.ik.grip_pose(q_to), ARC_BASE_COST, partial=True, seed=q_from) or []
         if not all(self.clearance.clear(q, held=held) for q in lead):
             return None
-        return lead if self.arm.swing_clear(lead[-1] if lead else q_from, q_to, held) else None
+        via = self.arm.swing_way(lead[-1] if lead else q_from, q_to, held)
+        return None if via is None else (lead, via)
 
-    def _ease_to(self, lead: list[np.ndarray], q: np.ndarray) -> None:
-        """Move a held object through `lead` (from `_ease_path`), then to configuration q (shape (13,)) in joint
-        space, slowly (a quick swing turns a long object held by one end in the fingers)."""
+    def _ease_to(self, ease: tuple[list[np.ndarray], list[np.ndarray]], q: np.ndarray) -> None:
+        """Move a held object along `ease` (from `_ease_path`): its line, then through its swing to configuration
+        q (shape (13,)) in joint space, slowly (a quick swing turns a long object held by one end in the
+        fingers)."""
+        lead, via = ease
         if lead:
             self.controller.move_through(lead)
-        self.controller.move_through([q], duration=EASE_SLOWDOWN * self.controller.duration(self.controller.target, q))
+        legs = zip([self.controller.target, *via], [*via, q], strict=True)
+        self.controller.move_through([*via, q], duration=EASE_SLOWDOWN * sum(self.controller.duration(a, b)
+                                                                             for a, b in legs))
         self.controller.settle(0.003)
 
     def _drive_for(self, points: list[np.ndarray], rotation: np.ndarray, posture: np.ndarray, held: Held,
-                   margin: float = 0.0) -> tuple[list[np.ndarray], list[np.ndarray]] | None:
+                   margin: float = 0.0) -> tuple[tuple, list[np.ndarray]] | None:
         """Drive, holding `held` in `posture` (shape (13,)), to a free base pose from which the held object eases
         from `posture` onto the first of `points` (m, each shape (3,)) and the grip site follows them at `rotation`
-        (shape (3, 3)), the object clear of the apartment all the way and the arm `margin` m off it; returns (the
-        ease, see `_ease_path`; the configurations along `points`), each configuration shape (13,), or None (the
-        robot stays)."""
+        (shape (3, 3)), the object clear of the apartment all the way and the arm `margin` m off it (`_plan_for`);
+        returns (the ease, see `_ease_path`; the configurations along `points`), each configuration shape (13,),
+        or None (the robot stays)."""
+        for base, ease, path in self._plan_for(points, rotation, posture, held, margin):
+            try:
+                self.navigator.drive_to(base, posture, self.arm.held_reach(), **CARRY_MOTION,
+                                        clear=self.arm.carry_clear())
+            except NavigationError:
+                continue
+            for q_in in [*ease[0], *ease[1], *path]:
+                q_in[:3] = self.controller.target[:3]  # where the base really stopped
+            return ease, path
+        return None
+
+    def _plan_for(self, points: list[np.ndarray], rotation: np.ndarray, posture: np.ndarray, held: Held,
+                  margin: float = 0.0, ease: bool = True):
+        """The plans of `_drive_for`, one per free base pose that gives one, lazily: (the base pose; the ease from
+        `posture`, `_ease_path`, or none without `ease`; the configurations along `points`, each shape (13,))."""
         quat = matrix_to_quat(rotation)
-        reach = self.arm.held_reach()
         obstacles = self.navigator.obstacles()
+        free = self.navigator.radius + CLEARANCE
         for base in base_candidates(points[-1], rotation, self.controller.q()[:2]):
-            free = self.navigator.radius + CLEARANCE
             if not self.navigator.plan.disk_is_free(base[0], base[1], free, obstacles):
                 continue
             q = posture.copy()
@@ -674,20 +720,9 @@ class Place:
                 path = self.arm.checked_line(start.q, points, quat, held)
                 if path is None:
                     continue
-                carried = posture.copy()
-                carried[:3] = base
-                ease = self._ease_path(carried, start.q, held)
-            if ease is None:
-                continue
-            try:
-                self.navigator.drive_to(base, posture, reach, **CARRY_MOTION, clear=self.arm.carry_clear())
-            except NavigationError:
-                continue
-            path = [start.q, *path]
-            for q_in in [*ease, *path]:
-                q_in[:3] = self.controller.target[:3]  # where the base really stopped
-            return ease, path
-        return None
+                lead = self._ease_path(q, start.q, held) if ease else ([], [])
+            if lead is not None:
+                yield base, lead, [start.q, *path]
 
 
 def _spread(spots: list, gap: float, limit: int) -> list:

@@ -50,8 +50,8 @@ class Robot:
         self.rng = rng if rng is not None else np.random.default_rng(0)
         self.clearance = ClearanceCheck(world, self.controller)
         self.arm = Arm(world, self.ik, self.controller, self.navigator, self.clearance)
-        self._pick = Pick(self.arm, self.observer, self.spots)
         self._place = Place(self.arm, self.observer, self.spots, self.rng)
+        self._pick = Pick(self.arm, self.observer, self.spots, self._place.takes)
 
     @property
     def held(self) -> str | None:
