@@ -12,6 +12,7 @@ import itertools
 import math
 from collections.abc import Callable
 
+import mujoco
 import numpy as np
 
 from homer_sim.home.catalog import CATALOG
@@ -50,6 +51,7 @@ BACK_OFF = (0.15, 0.3)  # m a base holding an object backs away before the carry
 PASS_OVER = 0.03  # m between a carried object and a surface it is carried over before it is put down
 PULL_BASE_COST = 0.1  # IK damping on the base while drawing an object out: the base backs away
 LEAD_HEIGHTS = (0.15, 0.3)  # m above a grasp's entry point the arm may first swing to, then come down
+SWING_TILT = math.radians(30.0)  # rad a held object may tilt from upright on a planned swing (`Arm.swing_way`)
 SWING_STEP = 0.02  # rad between checked configurations of a joint-space swing (a fingertip 0.9 m out moves
 # under 2 cm: it cannot pass through a drawer front unseen)
 UPRIGHT = 0.7  # z component of an object's up axis below which a put-down object has fallen over
@@ -176,18 +178,37 @@ class Arm:
         upper arm turned far from the raised arm's, swept the knife block beside the glass off the counter on the
         straight swing, however high it first rose); else one found by `plan_swing` over the joints' ranges (a
         pot held pitched, eased from the carry point down to a kitchen cabinet's shelf, swung its handle through
-        the cabinet's open door on every straight way); None where there is none of those."""
+        the cabinet's open door on every straight way); None where there is none of those. A held object is kept
+        within SWING_TILT of upright on the vias' ways (or as upright as it is at either end): a pot pinched by its
+        wall, turned over on the way, slipped out of the fingers however slowly it swung."""
         if self.swing_clear(q_from, q_to, held):
             return []
+        least = -1.0 if held is None else min(math.cos(SWING_TILT), self._held_up(q_from, held),
+                                              self._held_up(q_to, held))
         joints = range(3, self.controller.n_body)
         for subset in [*((j,) for j in joints), *itertools.combinations(joints, 2)]:
             via = q_from.copy()
             via[list(subset)] = q_to[list(subset)]
-            if self.swing_clear(q_from, via, held) and self.swing_clear(via, q_to, held):
+            if all(self.swing_clear(a, b, held) and self._kept_up(a, b, held, least)
+                   for a, b in ((q_from, via), (via, q_to))):
                 return [via]
         arm = slice(3, self.controller.n_body)
-        return plan_swing(q_from, q_to, lambda a, b: self.swing_clear(a, b, held), self.lower[arm], self.upper[arm],
-                          arm)
+        return plan_swing(q_from, q_to, lambda a, b: self.swing_clear(a, b, held) and self._kept_up(a, b, held, least),
+                          self.lower[arm], self.upper[arm], arm)
+
+    def _held_up(self, q: np.ndarray, held: Held) -> float:
+        """The vertical part of the up axis of `held`, in the hand at configuration q (shape (13,))."""
+        rotation = np.empty(9)
+        mujoco.mju_quat2Mat(rotation, self.ik.grip_pose(q)[1])
+        return float((rotation.reshape(3, 3) @ held.rotation)[2, 2])
+
+    def _kept_up(self, q_from: np.ndarray, q_to: np.ndarray, held: Held | None, least: float) -> bool:
+        """Whether `held` (if any) keeps the vertical part of its up axis at `least` at every SWING_STEP of the
+        joint-space move q_from -> q_to (each shape (13,))."""
+        if held is None:
+            return True
+        steps = max(1, int(np.ceil(np.max(np.abs(q_to[3:11] - q_from[3:11])) / SWING_STEP)))
+        return all(self._held_up(q_from + s * (q_to - q_from), held) >= least for s in np.linspace(0.0, 1.0, steps + 1))
 
     def _rise_to_swing(self) -> None:
         """Where the joint-space swing into `raised` would touch something, first move the hand straight up, every
