@@ -28,6 +28,7 @@ FAMILIES = (
     "flat",
 )
 CAVITY_FAMILIES = ("bowl", "cup", "mug", "pot", "bin")
+ROUND_FAMILIES = ("cylinder", "sphere", "cup", "bowl")  # families whose upright footprint is a disk
 CATEGORIES = ("object", "prop")
 MIN_EXTENT = 0.005  # m, smallest allowed bounding-box extent
 MAX_FOOTPRINT = 0.45  # m, largest footprint side for ordinary classes
@@ -65,6 +66,11 @@ class ObjectClass:
     def lying(self) -> bool:
         """True for a cylinder lying with its axis along x (its x extent exceeds its y extent)."""
         return self.family == "cylinder" and self.size[0] > self.size[1]
+
+    @property
+    def is_round(self) -> bool:
+        """Whether it stands on a round footprint (its horizontal extent is its diameter at any yaw)."""
+        return self.family in ROUND_FAMILIES and self.size[0] == self.size[1]
 
     @property
     def is_container(self) -> bool:

@@ -17,6 +17,7 @@ from homer_sim.graph import INSIDE, ON
 from homer_sim.home.catalog import CATALOG, ObjectClass
 from homer_sim.home.furniture import Place, footprint, furniture_geometry, local_to_world
 from homer_sim.home.layout import Furniture, Layout, ObjectDecl
+from homer_sim.home.shapes import cavity
 from homer_sim.robot_spec import ROBOT
 
 SPOT_GAP = 0.025  # m between neighbouring objects
@@ -194,22 +195,32 @@ def _start_poses_cached(layout: Layout) -> tuple[tuple[str, StartPose], ...]:
                 raise LayoutError(f"{decl.name}: an object on the floor of {decl.parent} needs `at` (x, y)")
             poses[decl.name] = StartPose(decl.name, (*decl.at, cls.size[2] / 2 + SPAWN_LIFT), yaw_quat(0.0))
             continue
-        if decl.parent in poses:  # on an object: packed on its top, turned as it is
+        if decl.parent in poses:  # on an object: packed on its top, turned as it is, or in a container, on its floor
             below, base = poses[decl.parent], CATALOG[_decl(layout, decl.parent).cls]
-            # the place frame's x runs along the object's y, so what lies on it keeps the object's yaw
-            top = Place(ON, (0.0, 0.0, 0.0), (base.size[1] / 2, base.size[0] / 2), math.inf)
-            spots = taken.setdefault((decl.parent, 0), [])
-            spot = pack_spot(top, cls, spots, step=0.005, centre_first=True)
-            if spot is None and not spots:  # alone, it may reach over the edge (a spoon across a bowl)
-                spot = (0.0, 0.0)
-                spots.append((-top.half_xy[0], -top.half_xy[1], top.half_xy[0], top.half_xy[1]))
-            if spot is None:
-                raise LayoutError(f"{decl.name}: does not fit beside what lies on {decl.parent} (size {cls.size} m)")
+            hollow, inside = cavity(base), taken.setdefault((decl.parent, 1), [])
+            reach = cls.size[0] / 2 if cls.is_round else math.hypot(*cls.size[:2]) / 2
+            if hollow is not None and not inside and reach <= hollow.floor_radius:
+                # the first that fits inside its walls at the floor stands there, centred (a trash bag put in a
+                # trash can at its top stood on its rim, and the can fell over)
+                inside.append(decl.name)
+                centre, floor, spot = (hollow.center_xy[1], hollow.center_xy[0]), hollow.floor_z, (0.0, 0.0)
+            else:
+                # the place frame's x runs along the object's y, so what lies on it keeps the object's yaw
+                top = Place(ON, (0.0, 0.0, 0.0), (base.size[1] / 2, base.size[0] / 2), math.inf)
+                spots = taken.setdefault((decl.parent, 0), [])
+                spot = pack_spot(top, cls, spots, step=0.005, centre_first=True)
+                if spot is None and not spots:  # alone, it may reach over the edge (a spoon across a bowl)
+                    spot = (0.0, 0.0)
+                    spots.append((-top.half_xy[0], -top.half_xy[1], top.half_xy[0], top.half_xy[1]))
+                if spot is None:
+                    raise LayoutError(f"{decl.name}: does not fit beside what lies on {decl.parent} (size {cls.size} "
+                                      f"m)")
+                centre, floor = (0.0, 0.0), base.size[2] / 2
             yaw = yaw_of(below.quat)
-            dx, dy = spot[1], spot[0]  # in the object's frame
+            dx, dy = centre[1] + spot[1], centre[0] + spot[0]  # in the object's frame
             x = below.pos[0] + math.cos(yaw) * dx - math.sin(yaw) * dy
             y = below.pos[1] + math.sin(yaw) * dx + math.cos(yaw) * dy
-            z = below.pos[2] + base.size[2] / 2 + cls.size[2] / 2 + SPAWN_LIFT
+            z = below.pos[2] + floor + cls.size[2] / 2 + SPAWN_LIFT
             poses[decl.name] = StartPose(decl.name, (x, y, z), below.quat)
             continue
         f = furniture[decl.parent]

@@ -12,7 +12,6 @@ import numpy as np
 
 from homer_sim.home.catalog import ObjectClass
 
-ROUND_FAMILIES = ("cylinder", "sphere", "cup", "bowl")  # families whose upright footprint is a disk
 ROUND_POINTS = 16  # points on the outline of a round footprint
 
 
@@ -70,8 +69,8 @@ def yaw_matrix(angle: float) -> np.ndarray:
 
 
 def is_round(cls: ObjectClass) -> bool:
-    """Whether the class stands on a round footprint (its horizontal extent is its diameter at any yaw)."""
-    return cls.family in ROUND_FAMILIES and cls.size[0] == cls.size[1]
+    """Whether the class stands on a round footprint (see `ObjectClass.is_round`)."""
+    return cls.is_round
 
 
 def extent(direction: np.ndarray, cls: ObjectClass, yaw: float) -> float:

@@ -277,6 +277,9 @@ def test_start_layout_moves_objects_to_the_parents_given_where_they_can_stand() 
     starts = {o.name: (o.parent, o.relation) for o in moved.objects}
     assert starts["bowl"] == ("table_dining_room", ON) and starts["spoon"] == ("bowl", ON)
     assert starts["trashbag"] == ("trashcan", ON)  # declared before the trash can: placed after it all the same
+    bag, can = start_poses(moved)["trashbag"].pos, start_poses(moved)["trashcan"].pos
+    # in it, on its floor (on its rim, it tipped the can over): centred, its bottom below the rim
+    assert np.allclose(bag[:2], can[:2]) and bag[2] - CATALOG["trashbag"].size[2] / 2 < can[2]
     assert starts["milk"] == ("cupboard", INSIDE)
     assert starts["mail"] == ("outside", INSIDE)  # on the porch's floor, clear of the groceries standing there
     porch = next(r.rect for r in layout.rooms if r.name == "outside")
