@@ -129,8 +129,9 @@ class Arm:
         once the arm is there: the open pads of a hand coming down from the raised arm swept a keyboard 77 cm
         across a desk; where that leg touches something, through a configuration from which it is clear, where
         `_swing_via` finds one (with the fingers open, else closed): straight from the raised arm, a hand
-        reaching for a microwave door's edge pushed the door 10 degrees shut. Returns False where `abort()`
-        stopped the move (see `Controller.move_through`)."""
+        reaching for a microwave door's edge pushed the door 10 degrees shut. The arm not tucked, it swings
+        straight to q_goal, through what `_swing_via` finds where that swing touches something. Returns False where
+        `abort()` stopped the move (see `Controller.move_through`)."""
         moved = True
         if self.folded:
             opened = q_goal.copy()
@@ -141,13 +142,17 @@ class Arm:
             else:
                 raised = self.raised(q_goal[3])
                 early = grip is None or self.swing_clear(raised, opened)
-                via = [] if early else self._swing_via(raised, opened) or self._swing_via(raised, q_goal)
+                if grip is None:
+                    via = self._swing_via(raised, q_goal)
+                else:
+                    via = [] if early else self._swing_via(raised, opened) or self._swing_via(raised, q_goal)
                 moved = self.controller.move_through([raised, *via, q_goal], grip=grip if early else None,
                                                      abort=abort, **FREE_MOTION)
                 if moved and not early:
                     self.controller.set_grip(grip)
         else:
-            moved = self.controller.move_through([q_goal], grip=grip, abort=abort)
+            moved = self.controller.move_through([*self._swing_via(self.controller.target, q_goal), q_goal], grip=grip,
+                                                 abort=abort)
         self.folded = False
         return moved
 
@@ -373,7 +378,8 @@ class Arm:
     def lead_in(self, q: np.ndarray, point: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
         """The way from the raised arm to configuration q (shape (13,), the grip site at `point`, m): q alone if
         the joint-space swing there touches nothing, else down onto `point` from a LEAD_HEIGHTS m higher one
-        (the swing passes over what stands on a table); None if neither is clear."""
+        (the swing passes over what stands on a table), else through what `swing_way` finds; None if none is
+        clear."""
         if self.swing_clear(self.raised(q[3]), q):
             return [q]
         for height in LEAD_HEIGHTS:
@@ -384,7 +390,8 @@ class Arm:
             down = self.checked_line(via.q, [high, point], quat)
             if down is not None:
                 return [via.q, *down]
-        return None
+        via = self.swing_way(self.raised(q[3]), q)
+        return None if via is None else [*via, q]
 
     def swing_clear(self, q_from: np.ndarray, q_to: np.ndarray, held: Held | None = None) -> bool:
         """Whether the joint-space move q_from -> q_to (each shape (13,), base at q_to's) keeps the arm, the
