@@ -401,9 +401,10 @@ class Pick:
         """(grasps, out, front) for `_pick_from_shelf`: without `out`, the grasps of `name` inside cabinet `node`
         approached against its front normal (`out`, shape (2,)), the front plane `front` m out from the object,
         the palm clear of its neighbours; with `out`, approached against `out` from anywhere (`front` -inf), those a
-        shelf of `into` takes (`takes`) first, of all grasps (a pot goes into a kitchen cabinet held from above,
-        not pitched), then the others of those a shelf takes as a rule (level, then pitched: a hand pointing
-        straight down, holding the object front to back or leaning aside does not put it down under a shelf)."""
+        shelf of `into` takes (`takes`) first, of all grasps (a pot picked off the stove pitched 60 degrees met the
+        kitchen cabinet's shelf above with its wrist; pitched 45, it goes in), then the others of those a shelf
+        takes as a rule (level, then pitched: a hand pointing straight down, holding the object front to back or
+        leaning aside does not put it down under a shelf)."""
         if out is None:
             furniture = self.navigator.furniture[node]
             out = self.navigator.front_normal(node)

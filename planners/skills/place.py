@@ -556,9 +556,9 @@ class Place:
         """Whether a shelf inside `node` (or a level under another, `covered_places`) takes `name` held as `held`
         at grip rotation `grip` (shape (3, 3)): as a grasp being chosen for it would hold it, put in as
         `_place_in_shelf` puts it, from a free base pose at one of SHELF_TAKES of its spots (the way from the
-        carry posture, which that grasp has not reached yet, is not checked). A pot held pitched from the front,
-        picked off the stove for a kitchen cabinet, met the shelf above with its wrist at every spot; held from
-        above, as it is picked from there, it goes in."""
+        carry posture, which that grasp has not reached yet, is not checked). A pot held pitched 60 degrees from
+        the front, picked off the stove for a kitchen cabinet, met the shelf above with its wrist at every spot;
+        pitched 45, it goes in."""
         places = shelves_inside(self.spots, self.navigator.furniture.get(node), node, None) or covered_places(
             self.spots, node, None)
         q = self.controller.target
