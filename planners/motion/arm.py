@@ -378,8 +378,7 @@ class Arm:
     def lead_in(self, q: np.ndarray, point: np.ndarray, quat: np.ndarray) -> list[np.ndarray] | None:
         """The way from the raised arm to configuration q (shape (13,), the grip site at `point`, m): q alone if
         the joint-space swing there touches nothing, else down onto `point` from a LEAD_HEIGHTS m higher one
-        (the swing passes over what stands on a table), else through what `swing_way` finds; None if none is
-        clear."""
+        (the swing passes over what stands on a table); None if neither is clear."""
         if self.swing_clear(self.raised(q[3]), q):
             return [q]
         for height in LEAD_HEIGHTS:
@@ -390,8 +389,7 @@ class Arm:
             down = self.checked_line(via.q, [high, point], quat)
             if down is not None:
                 return [via.q, *down]
-        via = self.swing_way(self.raised(q[3]), q)
-        return None if via is None else [*via, q]
+        return None
 
     def swing_clear(self, q_from: np.ndarray, q_to: np.ndarray, held: Held | None = None) -> bool:
         """Whether the joint-space move q_from -> q_to (each shape (13,), base at q_to's) keeps the arm, the

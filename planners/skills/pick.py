@@ -401,20 +401,23 @@ class Pick:
         """(grasps, out, front) for `_pick_from_shelf`: without `out`, the grasps of `name` inside cabinet `node`
         approached against its front normal (`out`, shape (2,)), the front plane `front` m out from the object,
         the palm clear of its neighbours; with `out`, approached against `out` from anywhere (`front` -inf), those a
-        shelf of `into` takes (`takes`) first, of all grasps (a pot picked off the stove pitched 60 degrees met the
-        kitchen cabinet's shelf above with its wrist; pitched 45, it goes in), then the others of those a shelf
-        takes as a rule (level, then pitched: a hand pointing straight down, holding the object front to back or
-        leaning aside does not put it down under a shelf)."""
+        shelf takes as a rule (level, then pitched: a hand pointing straight down, holding the object front to back
+        or leaning aside does not put it down under a shelf), those a shelf of `into` takes (`takes`) first (a pot
+        picked off the stove pitched 60 degrees met the kitchen cabinet's shelf above with its wrist; pitched 45,
+        it goes in), or, where it takes none of them, those of the other grasps it takes (a vegetable held from
+        above, though the fridge takes it so, pushed an egg 4 cm in there)."""
         if out is None:
             furniture = self.navigator.furniture[node]
             out = self.navigator.front_normal(node)
             front = float(np.dot(np.array(furniture.pos) + out * furniture.size[1] / 2 - position[:2], out))
             return shelf_grasps(cls, position, quat, out, front, neighbour_footprints(self.world, name)), out, front
         grasps = shelf_grasps(cls, position, quat, out, -np.inf)
-        taken = [] if self.takes is None or into is None else [
-            g for g in grasps if self.takes(name, into, g.rotation, self._held_by(name, g))]
-        return taken + [g for g in grasps if g.kind.pitch != 90 and not g.kind.along and not g.kind.roll
-                        and all(g is not t for t in taken)], out, -np.inf
+        usual = [g for g in grasps if g.kind.pitch != 90 and not g.kind.along and not g.kind.roll]
+        if self.takes is None or into is None:
+            return usual, out, -np.inf
+        takes = lambda group: [g for g in group if self.takes(name, into, g.rotation, self._held_by(name, g))]  # noqa: E731
+        taken = takes(usual) or takes([g for g in grasps if all(g is not u for u in usual)])
+        return taken + [g for g in usual if all(g is not t for t in taken)], out, -np.inf
 
     def _try_grasp(self, name: str, grasp: Grasp, pull: np.ndarray | None = None,
                    path_in: list[np.ndarray] | None = None, first_lift: float = SIDE_LIFT, drawn: float = SIDE_PULL

@@ -10,6 +10,7 @@ observed scene graph. Movement comes from `planners.motion.arm`.
 
 from __future__ import annotations
 
+import copy
 import math
 from itertools import islice
 
@@ -119,9 +120,11 @@ class Place:
             return SkillResult(False, f"place: no free spot for {name} on {node}")
         return SkillResult(False, f"place: {'; '.join(failures)}")
 
-    def _free_spots(self, name: str, node: str, place_index: int):
-        """The free spots for `name` on place `place_index` of `node` (see `Spots.free_spots`)."""
-        return self.spots.free_spots(name, node, place_index, self.rng, {self.world.object_index(name)})
+    def _free_spots(self, name: str, node: str, place_index: int, rng: np.random.Generator | None = None):
+        """The free spots for `name` on place `place_index` of `node` (see `Spots.free_spots`), drawn with `rng`
+        (default: the skill's)."""
+        return self.spots.free_spots(name, node, place_index, self.rng if rng is None else rng,
+                                     {self.world.object_index(name)})
 
     def _place_on_floor(self, name: str, room: str) -> SkillResult:
         """Put the held `name` on a free spot of the floor of `room` that leaves the floor passable: near the robot
@@ -555,29 +558,31 @@ class Place:
     def takes(self, name: str, node: str, grip: np.ndarray, held: Held) -> bool:
         """Whether a shelf inside `node` (or a level under another, `covered_places`) takes `name` held as `held`
         at grip rotation `grip` (shape (3, 3)): as a grasp being chosen for it would hold it, put in as
-        `_place_in_shelf` puts it, from a free base pose at one of SHELF_TAKES of its spots (the way from the
-        carry posture, which that grasp has not reached yet, is not checked). A pot held pitched 60 degrees from
-        the front, picked off the stove for a kitchen cabinet, met the shelf above with its wrist at every spot;
-        pitched 45, it goes in."""
+        `_place_in_shelf` puts it (at the spots it would draw now), from a free base pose at one of SHELF_TAKES
+        of them, the skill's random draws left as they were (the way from the carry posture, which that grasp
+        has not reached yet, is not checked). A pot held pitched 60 degrees from the front, picked off the stove
+        for a kitchen cabinet, met the shelf above with its wrist at every spot; pitched 45, it goes in."""
         places = shelves_inside(self.spots, self.navigator.furniture.get(node), node, None) or covered_places(
             self.spots, node, None)
-        q = self.controller.target
-        for _, rotation, release, outside, over in self._shelf_ways(name, node, places, grip, held)[:SHELF_TAKES]:
+        q, rng = self.controller.target, copy.deepcopy(self.rng)  # the spots the place will draw, the draws undone
+        for _, rotation, release, outside, over in self._shelf_ways(name, node, places, grip, held, rng)[:SHELF_TAKES]:
             up = np.array([0.0, 0.0, over])
             if next(self._plan_for([outside + up, release + up, release], rotation, q, held, ease=False), None):
                 return True
         return False
 
-    def _shelf_ways(self, name: str, node: str, places: list[int], grip: np.ndarray, held: Held) -> list[tuple]:
+    def _shelf_ways(self, name: str, node: str, places: list[int], grip: np.ndarray, held: Held,
+                    rng: np.random.Generator | None = None) -> list[tuple]:
         """The ways into the shelves `places` of cabinet `node` for `name`, held as `held` at grip rotation `grip`
         (shape (3, 3)): (spot, m; the grip rotation it goes in at, `_into_shelf`; the grip site at the release,
-        m; out of the front at that height, m; the height above the release it goes in at, m), a free spot each,
-        nearest the front first, then those of each shelf none of those is on."""
+        m; out of the front at that height, m; the height above the release it goes in at, m), a free spot each
+        (drawn with `rng`, default the skill's), nearest the front first, then those of each shelf none of those
+        is on."""
         size = np.asarray(self.world.object_class(name).size)
         furniture = self.navigator.furniture[node]
         out = self.navigator.front_normal(node)
         front = np.array(furniture.pos) + out * furniture.size[1] / 2
-        drawn = sorted(((spot, k) for k in places for spot in self._free_spots(name, node, k)),
+        drawn = sorted(((spot, k) for k in places for spot in self._free_spots(name, node, k, rng)),
                        key=lambda pair: float(np.dot(front - pair[0].pos[:2], out)))
         spots = _spread([spot for spot, _ in drawn], SHELF_SPOT_GAP, SHELF_SPOTS)
         on = {id(spot): k for spot, k in drawn}
