@@ -9,7 +9,7 @@ retried from the next candidate. Movement comes from `planners.motion.arm`.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import replace
 
 import numpy as np
@@ -343,12 +343,16 @@ class Pick:
         # 3 cm up struck the basin's front wall and fell over in the hand)
         rise = max(rise_to_pass(self.world, name, position, out, front if np.isfinite(front) else SIDE_PULL),
                    self._rim_rise(node, position, cls.size[2]))
-        if not grasps:
-            return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
-        unreachable, failures = [], []
+        unreachable, failures, tried = [], [], []
         pull = np.array([out[0], out[1], 0.0])
-        # every grasp unfolding the arm first (the tried way), then those no base pose reached, swinging straight in
-        for grasp, direct in [*((g, False) for g in grasps), *((g, True) for g in grasps)]:
+
+        def passes():  # every grasp unfolding the arm first (the tried way), then those no base pose reached,
+            for g in grasps:  # swinging straight in; the grasps come as they are ordered, lazily
+                tried.append(g)
+                yield g, False
+            yield from ((g, True) for g in tried)
+
+        for grasp, direct in passes():
             if direct and grasp.kind not in unreachable:
                 continue
             try:
@@ -375,6 +379,8 @@ class Pick:
             if replan and disturbed(position, quat, *now):
                 again = self._pick_from_shelf(name, node, cls, *now, out, replan=False, into=into)
                 return again if again.success else SkillResult(False, f"{again.reason} (moved by {failures})")
+        if not tried:
+            return SkillResult(False, f"{name}: no grasp fits its shape ({cls.size} m) on a shelf of {node}")
         if unreachable:
             failures.append(f"{', '.join(map(str, unreachable))}: no free base pose reaches the grasp without the arm "
                             f"touching {node} or its contents")
@@ -397,7 +403,8 @@ class Pick:
                     grasp.rotation.T @ self.world.data.xmat[body].reshape(3, 3))
 
     def _shelf_candidates(self, name: str, node: str, cls, position: np.ndarray, quat: np.ndarray,
-                          out: np.ndarray | None, into: str | None = None) -> tuple[list[Grasp], np.ndarray, float]:
+                          out: np.ndarray | None, into: str | None = None
+                          ) -> tuple[Iterable[Grasp], np.ndarray, float]:
         """(grasps, out, front) for `_pick_from_shelf`: without `out`, the grasps of `name` inside cabinet `node`
         approached against its front normal (`out`, shape (2,)), the front plane `front` m out from the object,
         the palm clear of its neighbours; with `out`, approached against `out` from anywhere (`front` -inf), those a
@@ -415,9 +422,23 @@ class Pick:
         usual = [g for g in grasps if g.kind.pitch != 90 and not g.kind.along and not g.kind.roll]
         if self.takes is None or into is None:
             return usual, out, -np.inf
-        takes = lambda group: [g for g in group if self.takes(name, into, g.rotation, self._held_by(name, g))]  # noqa: E731
-        taken = takes(usual) or takes([g for g in grasps if all(g is not u for u in usual)])
-        return taken + [g for g in usual if all(g is not t for t in taken)], out, -np.inf
+        return self._taken_first(name, into, usual, [g for g in grasps if all(g is not u for u in usual)]), out, \
+            -np.inf
+
+    def _taken_first(self, name: str, into: str, usual: list[Grasp], others: list[Grasp]) -> Iterator[Grasp]:
+        """The grasps of `name` in `usual` that a shelf of `into` takes (`takes`), in their order; where it takes
+        none of them, those of `others` it takes; then the rest of `usual`: lazily (a check costs a search for a
+        base pose at every spot, and the first grasp taken is mostly the one picked with)."""
+        takes = lambda g: self.takes(name, into, g.rotation, self._held_by(name, g))  # noqa: E731
+        rest = []
+        for grasp in usual:
+            if takes(grasp):
+                yield grasp
+            else:
+                rest.append(grasp)
+        if len(rest) == len(usual):
+            yield from (g for g in others if takes(g))
+        yield from rest
 
     def _try_grasp(self, name: str, grasp: Grasp, pull: np.ndarray | None = None,
                    path_in: list[np.ndarray] | None = None, first_lift: float = SIDE_LIFT, drawn: float = SIDE_PULL

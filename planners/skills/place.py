@@ -59,7 +59,6 @@ DROP_INTO = 0.02  # m over a bin's rim a thing with no up (cloth) is let go to d
 SHELF_SPOTS = 6  # free spots tried for a place inside, nearest the front first, then half as many on each other
 # shelf (rack),
 SHELF_SPOT_GAP = 0.05  # m apart at least
-SHELF_TAKES = 3  # of those, the spots a grasp being chosen for a shelf is checked against (`Place.takes`)
 EASE_SLOWDOWN = 3.0  # times the default duration of a joint-space move with a held object into furniture
 RELEASE_OPENING = 0.015  # m per finger the fingers open past the held object to let go (inside a shelf)
 TOP_RELEASE_OPENING = 0.05  # m per finger the fingers open at least to let go on an open top
@@ -558,14 +557,16 @@ class Place:
     def takes(self, name: str, node: str, grip: np.ndarray, held: Held) -> bool:
         """Whether a shelf inside `node` (or a level under another, `covered_places`) takes `name` held as `held`
         at grip rotation `grip` (shape (3, 3)): as a grasp being chosen for it would hold it, put in as
-        `_place_in_shelf` puts it (at the spots it would draw now), from a free base pose at one of SHELF_TAKES
-        of them, the skill's random draws left as they were (the way from the carry posture, which that grasp
-        has not reached yet, is not checked). A pot held pitched 60 degrees from the front, picked off the stove
-        for a kitchen cabinet, met the shelf above with its wrist at every spot; pitched 45, it goes in."""
+        `_place_in_shelf` puts it (at the spots it would draw now), from a free base pose at one of them, the
+        skill's random draws left as they were (the way from the carry posture, which that grasp has not reached
+        yet, is not checked; checked at only the first 3 spots, a glass's grasp that went in at a later one was
+        passed over for one that pushed a cup in the dishwasher). A pot held pitched 60 degrees from the front,
+        picked off the stove for a kitchen cabinet, met the shelf above with its wrist at every spot; pitched 45,
+        it goes in."""
         places = shelves_inside(self.spots, self.navigator.furniture.get(node), node, None) or covered_places(
             self.spots, node, None)
         q, rng = self.controller.target, copy.deepcopy(self.rng)  # the spots the place will draw, the draws undone
-        for _, rotation, release, outside, over in self._shelf_ways(name, node, places, grip, held, rng)[:SHELF_TAKES]:
+        for _, rotation, release, outside, over in self._shelf_ways(name, node, places, grip, held, rng):
             up = np.array([0.0, 0.0, over])
             if next(self._plan_for([outside + up, release + up, release], rotation, q, held, ease=False), None):
                 return True
