@@ -436,7 +436,7 @@ class Pick:
                 yield grasp
             else:
                 rest.append(grasp)
-        if len(rest) == len(usual):
+        if rest and len(rest) == len(usual):  # of none (not: where there are none; then the next side's)
             yield from (g for g in others if takes(g))
         yield from rest
 

@@ -555,16 +555,18 @@ class Place:
                                   f"touching {node} or its contents ({len(ways)} spots tried)")
 
     def takes(self, name: str, node: str, grip: np.ndarray, held: Held) -> bool:
-        """Whether a shelf inside `node` (or a level under another, `covered_places`) takes `name` held as `held`
-        at grip rotation `grip` (shape (3, 3)): as a grasp being chosen for it would hold it, put in as
-        `_place_in_shelf` puts it (at the spots it would draw now), from a free base pose at one of them, the
-        skill's random draws left as they were (the way from the carry posture, which that grasp has not reached
-        yet, is not checked; checked at only the first 3 spots, a glass's grasp that went in at a later one was
-        passed over for one that pushed a cup in the dishwasher). A pot held pitched 60 degrees from the front,
-        picked off the stove for a kitchen cabinet, met the shelf above with its wrist at every spot; pitched 45,
-        it goes in."""
-        places = shelves_inside(self.spots, self.navigator.furniture.get(node), node, None) or covered_places(
-            self.spots, node, None)
+        """Whether a shelf inside `node` takes `name` held as `held` at grip rotation `grip` (shape (3, 3)), as a
+        grasp being chosen for it would hold it: put in as `_place_in_shelf` puts it (at the spots it would draw
+        now, the skill's random draws left as they were), from a free base pose at one of them (the way from the
+        carry posture, which that grasp has not reached yet, is not checked; checked at only the first 3 spots, a
+        glass's grasp that went in at a later one was passed over for one that pushed a cup in the dishwasher).
+        True where `node` has no shelf behind a door: the levels of an open shelf under another are tried after its
+        top, which takes anything (a remote control's grasp was passed over for one that pushed a radio 4.6 cm
+        on a tv stand). A pot held pitched 60 degrees from the front, picked off the stove for a kitchen cabinet,
+        met the shelf above with its wrist at every spot; pitched 45, it goes in."""
+        places = shelves_inside(self.spots, self.navigator.furniture.get(node), node, None)
+        if not places:  # an open top first (see `place`), which takes anything
+            return True
         q, rng = self.controller.target, copy.deepcopy(self.rng)  # the spots the place will draw, the draws undone
         for _, rotation, release, outside, over in self._shelf_ways(name, node, places, grip, held, rng):
             up = np.array([0.0, 0.0, over])
