@@ -212,8 +212,8 @@ class Arm:
         joint-space move q_from -> q_to (each shape (13,))."""
         if held is None:
             return True
-        steps = max(1, int(np.ceil(np.max(np.abs(q_to[3:11] - q_from[3:11])) / SWING_STEP)))
-        return all(self._held_up(q_from + s * (q_to - q_from), held) >= least for s in np.linspace(0.0, 1.0, steps + 1))
+        return all(self._held_up(q_from + s * (q_to - q_from), held) >= least
+                   for s in np.linspace(0.0, 1.0, _swing_steps(q_from, q_to) + 1))
 
     def _rise_to_swing(self) -> None:
         """Where the joint-space swing into `raised` would touch something, first move the hand straight up, every
@@ -397,7 +397,7 @@ class Arm:
         checked every SWING_STEP rad of the largest joint change."""
         q_from = q_from.copy()
         q_from[:3] = q_to[:3]
-        steps = max(1, int(np.ceil(np.max(np.abs(q_to[3:11] - q_from[3:11])) / SWING_STEP)))
+        steps = _swing_steps(q_from, q_to)
         return all(self.clearance.clear(q_from + s * (q_to - q_from), held=held, fingers=True, itself=True)
                    for s in np.linspace(0.0, 1.0, steps + 1)[1:])
 
@@ -571,3 +571,8 @@ class Arm:
     def grip_quat(self) -> np.ndarray:
         """The grip site's current orientation (wxyz), kept while carrying."""
         return matrix_to_quat(self.world.data.site("robot/grip").xmat.reshape(3, 3))
+
+
+def _swing_steps(q_from: np.ndarray, q_to: np.ndarray) -> int:
+    """How many SWING_STEP steps the largest torso or arm joint change of q_from -> q_to takes (at least one)."""
+    return max(1, int(np.ceil(np.max(np.abs(q_to[3:11] - q_from[3:11])) / SWING_STEP)))
