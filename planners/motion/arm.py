@@ -117,6 +117,7 @@ class Arm:
         waypoint between tuck and any reach, so the folded arm never sweeps through a counter."""
         q = self.tuck.copy()
         q[:3] = self.controller.target[:3]
+        q[self.controller.n_body:] = self.controller.target[self.controller.n_body:]  # the fingers stay as they are
         q[3] = max(torso, RAISED_TORSO)
         q[self.shoulder_lift] = RAISED_SHOULDER
         return q
@@ -241,6 +242,7 @@ class Arm:
         slowest joint (0.1 m/s), so it stays up between skills instead of going down and up again."""
         q = self.tuck.copy()
         q[:3] = self.controller.target[:3]
+        q[self.controller.n_body:] = self.controller.target[self.controller.n_body:]  # the fingers stay as they are
         q[3] = max(float(self.controller.target[3]), float(self.tuck[3]))
         return q
 

@@ -68,6 +68,7 @@ class ClearanceCheck:
                 b = world.model.body_parentid[b]
             in_hand[body] = b == hand
         self.arm_body = self.robot & ~in_hand[world.model.geom_bodyid]  # the base, torso and arm up to the wrist
+        self.base = world.model.geom_bodyid == world.model.body(PREFIX + "base").id
         self.conaffinity = world.model.geom_conaffinity.copy()
         self.model.geom_conaffinity[~self.robot] = 0
         assert _same_filter(world.model, self.robot), "the robot-only collision filter would drop pairs"
@@ -99,9 +100,11 @@ class ClearanceCheck:
         comes no closer than its margin), with `articulation` (if given) at joint value `value` (rad or m), `held`
         (if given) in the hand, and everything else where it is now, but the objects whose free joints' qpos
         addresses are `riders` (in a drawer being moved): they move with the drawer. With `fingers`, the fingers
-        are checked too (a hand swinging free touches nothing at all). With `itself`, `held` must not touch the
-        robot either, but for its hand (from the wrist on, which holds it): a joint-space way planned over the
-        joints' ranges swung a pot in the hand into the robot's base, and it fell out."""
+        are checked too (a hand swinging free touches nothing at all). `held` must not touch the robot's base (a
+        radio lowered to the floor in front of it met the base on the way down and slid 4 cm in the fingers); with
+        `itself`, nor the rest of the robot but its hand (from the wrist on, which holds it): a joint-space way
+        planned over the joints' ranges swung a pot in the hand into the robot's base, and it fell out (a laundry
+        basket held by its rim at the carry point lies against the shoulder: not checked elsewhere)."""
         d = self.scratch
         d.qpos[:] = self.world.data.qpos
         d.qpos[self.qpos_adr] = q
@@ -128,10 +131,11 @@ class ClearanceCheck:
             self._collide(geoms)
         g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
         touching = (checked[g1] != checked[g2]) & ~(robot[g1] & robot[g2])
-        if itself and held is not None:
+        if held is not None:
             own = np.zeros_like(robot)
             own[list(held.geoms)] = True
-            touching |= (own[g1] & self.arm_body[g2]) | (own[g2] & self.arm_body[g1])
+            body = self.arm_body if itself else self.base
+            touching |= (own[g1] & body[g2]) | (own[g2] & body[g1])
         return not (touching & (d.contact.dist[: d.ncon] < self.MARGIN)).any()
 
     def bodies_struck(self, q: np.ndarray, held: Held, bodies: frozenset[int], margin: float = 0.0) -> set[int]:

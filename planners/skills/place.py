@@ -171,9 +171,10 @@ class Place:
 
     def _down_at(self, name: str, node: str, anchor: str, target: np.ndarray) -> SkillResult:
         """Carry `name` to stand at `anchor` (furniture: in front of it; a room: near `target` on the floor) and
-        lower it onto `target` (m) on `node`; in front of furniture along a checked way where one is found, as onto
-        a spot of the furniture (`place`): lowered unchecked from where the carry stopped, a vegetable for the
-        cutting board would have struck the knife block beside it, and the place gave up."""
+        lower it onto `target` (m) on `node` along a checked way where one is found (`_lower`), as onto a spot of
+        the furniture (`place`): lowered unchecked from where the carry stopped, a vegetable for the cutting board
+        would have struck the knife block beside it, and the place gave up; a radio lowered to the floor straight
+        down from where the robot stood met the robot's base on the way and came down on a shelf's plinth."""
         if anchor in self.navigator.furniture:
             failure, short = self._carry_to(name, anchor, target)
             if failure is not None:
@@ -185,7 +186,7 @@ class Place:
                                     self.arm.held_reach(), **CARRY_MOTION, clear=self.arm.carry_clear())
         except HomerError as error:
             return SkillResult(False, f"place: {error}")
-        return self._fell_out(name, held_at) or self._lower_onto(name, node, target, short=False)
+        return self._fell_out(name, held_at) or self._lower(name, node, target, short=False)
 
     def _carry_to(self, name: str, node: str, target: np.ndarray) -> tuple[SkillResult | None, bool]:
         """Carry `name` to a base pose in front of furniture `node` facing `target` (m, the spot it goes to; see
