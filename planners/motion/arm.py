@@ -117,7 +117,6 @@ class Arm:
         waypoint between tuck and any reach, so the folded arm never sweeps through a counter."""
         q = self.tuck.copy()
         q[:3] = self.controller.target[:3]
-        q[self.controller.n_body:] = self.controller.target[self.controller.n_body:]  # the fingers stay as they are
         q[3] = max(torso, RAISED_TORSO)
         q[self.shoulder_lift] = RAISED_SHOULDER
         return q
@@ -158,19 +157,38 @@ class Arm:
         return moved
 
     def retract(self) -> None:
-        """Tuck the arm in place (the base and the torso stay): with an empty hand straight there if that swing
-        touches nothing, quicker; else through `raised`, the hand first risen clear for that swing where it must
-        (`_rise_to_swing`)."""
+        """Tuck the arm (the torso stays): with an empty hand straight there if that swing touches nothing,
+        quicker; else through `raised`, the hand first risen clear for that swing where it must (`_rise_to_swing`),
+        along `swing_way`. Where that finds no way,
+        the base first backs straight away, the arm held as it is (`_backed_off`), and the way is sought again
+        from there (swung straight from beside a dresser's drawer it had just pulled open, the open hand pushed
+        the drawer 28 cm shut); straight where there is none then. Every check sees the fingers as they are
+        (`_as_is`): checked closed, a hand opened wide to let go of a cd swung back from the tv stand and dragged
+        the radio beside it onto the floor."""
         if not self.folded:
-            tucked = self.tucked()
-            if self.held is None and self.swing_clear(self.controller.target, tucked):
+            tucked = self._as_is(self.tucked())
+            if self.held is None and self.swing_clear(self._as_is(self.controller.target), tucked):
                 self.controller.move_through([tucked], **FREE_MOTION)
             else:
                 self._rise_to_swing()
-                raised = self.raised(self.controller.target[3])
-                via = self._swing_via(self.controller.target, raised)
-                self.controller.move_through([*via, raised, tucked])
+                held = None if self.held is None else self.held_object(self.held)
+                via = self.swing_way(self._as_is(self.controller.target), self._raised_as_is(), held)
+                back = self._backed_off(held) if via is None else None
+                if back:
+                    self.controller.move_through(back)
+                    via = self.swing_way(self._as_is(self.controller.target), self._raised_as_is(), held)
+                self.controller.move_through([*(via or []), self._raised_as_is(), self._as_is(self.tucked())])
         self.folded = True
+
+    def _as_is(self, q: np.ndarray) -> np.ndarray:
+        """Configuration q (shape (13,)) with the fingers as they are now (a move through it leaves them so)."""
+        q = q.copy()
+        q[self.controller.n_body:] = self.controller.q()[self.controller.n_body:]
+        return q
+
+    def _raised_as_is(self) -> np.ndarray:
+        """`raised` at the torso's target height, the fingers as they are now."""
+        return self._as_is(self.raised(self.controller.target[3]))
 
     def _swing_via(self, q_from: np.ndarray, q_to: np.ndarray) -> list[np.ndarray]:
         """`swing_way` from q_from to q_to with what the hand holds; none where it finds no way."""
@@ -220,19 +238,22 @@ class Arm:
         """Where the joint-space swing into `raised` would touch something, first move the hand straight up, every
         RETRACT_STEP m as long as the arm (and what it holds) touches nothing, RETRACT_RISE m at most, to the
         first height from which that swing is clear (or the highest clear one): a hand let go low over a low
-        table swung sideways into the raised arm across it and pushed a violin 18 cm."""
+        table swung sideways into the raised arm across it and pushed a violin 18 cm. The fingers are checked too,
+        as they are (`_as_is`): risen from below the handle of a drawer it had just let go of, the open hand rose
+        into the handle and the swing from there pushed the drawer 10 cm shut."""
         held = None if self.held is None else self.held_object(self.held)
-        if self.swing_clear(self.controller.target, self.raised(self.controller.target[3]), held):
+        start = self._as_is(self.controller.target)
+        if self.swing_clear(start, self._raised_as_is(), held):
             return
-        grip, quat = self.ik.grip_pose(self.controller.target)
+        grip, quat = self.ik.grip_pose(start)
         steps = int(round(RETRACT_RISE / RETRACT_STEP))
-        path = self.line(grip, grip + np.array([0.0, 0.0, RETRACT_RISE]), quat, steps=steps, partial=True)
+        path = self.line(grip, grip + np.array([0.0, 0.0, RETRACT_RISE]), quat, steps=steps, partial=True, seed=start)
         up = []
         for q in path:
-            if not self.clearance.clear(q, held=held):
+            if not self.clearance.clear(q, held=held, fingers=True):
                 break
             up.append(q)
-            if self.swing_clear(q, self.raised(q[3]), held):
+            if self.swing_clear(q, self._as_is(self.raised(q[3])), held):
                 break
         if up:
             self.controller.move_through(up)
@@ -242,7 +263,6 @@ class Arm:
         slowest joint (0.1 m/s), so it stays up between skills instead of going down and up again."""
         q = self.tuck.copy()
         q[:3] = self.controller.target[:3]
-        q[self.controller.n_body:] = self.controller.target[self.controller.n_body:]  # the fingers stay as they are
         q[3] = max(float(self.controller.target[3]), float(self.tuck[3]))
         return q
 
@@ -436,10 +456,11 @@ class Arm:
         self.controller.move_through(path, speed=CARRY_ARM_SPEED)
         return path[-1]
 
-    def _backed_off(self, held: Held) -> list[np.ndarray] | None:
+    def _backed_off(self, held: Held | None) -> list[np.ndarray] | None:
         """Configurations (each shape (13,)) that back the base straight away from where it faces, the arm and
         the torso held as they are (the hand moves with the base), by the first of BACK_OFF m whose way is free
-        for the base and keeps the arm and `held` clear all along, checked every ENTRY_STEP m; None if none is."""
+        for the base and keeps the arm and `held` (an object in the hand, if any) clear all along, checked every
+        ENTRY_STEP m; None if none is."""
         q0 = self.controller.target.copy()
         heading = np.array([math.cos(q0[2]), math.sin(q0[2])])
         obstacles = self.navigator.obstacles()

@@ -70,11 +70,8 @@ class Controller:
 
     def command(self, q_body: np.ndarray, grip: float | None = None) -> None:
         """Write targets: q_body shape (11,) or (13,) (base, torso, arm[, fingers]); grip: opening per finger, m.
-        The target's finger entries are the fingers as they are (the gripper is driven by `grip` alone): checks
-        planned from the target see the hand as it is (held at their start value, 0, a hand opened wide to let go
-        of a cd was checked closed on its swing back and dragged a radio off a tv stand)."""
+        The target's finger entries are not written (the gripper is driven by `grip` alone)."""
         self.target[: self.n_body] = q_body[: self.n_body]
-        self.target[self.n_body:] = self.q()[self.n_body:]
         if grip is not None:
             self.grip_target = min(max(float(grip), 0.0), self.robot.finger_stroke)
         self._ctrl[: self.n_body] = self.target[: self.n_body]

@@ -171,3 +171,28 @@ def test_robot_opens_every_door_and_drawer_of_the_apartment(name: str) -> None:
     robot.observer.observe_all()
     opened = robot.open_articulation(name)
     assert opened.success, opened.reason
+
+
+def test_a_retract_below_a_drawers_handle_does_not_rise_into_it() -> None:
+    """The hand let go of a drawer it opened, drawn back and lower than its handle: the retract rises only as far
+    as the open fingers stay off the handle (risen into it, the swing from there pushed the drawer 10 cm shut)."""
+    world = World(extras=[add_robot])
+    world.settle()
+    robot = Robot(world)
+    robot.observer.observe_all()
+    name = "dresser/drawer_2"
+    assert robot.open_articulation(name).success
+    motion = PartMotion(world, name)
+    pos, quat = motion.grip_target(handle_grasp(motion.handle_local, "slide"), motion.value)
+    rotation = np.empty(9)
+    mujoco.mju_quat2Mat(rotation, quat)
+    below = pos - 0.10 * rotation.reshape(3, 3)[:, 0] - np.array([0.0, 0.0, 0.09])
+    result = robot.arm.ik.solve(robot.controller.target, below, quat)
+    assert result.converged, result.reason
+    robot.arm.reach(result.q, grip=0.03)
+    robot.controller.settle(0.005)
+    opened = world.openness(name)
+    robot.arm.retract()
+    world.settle(max_seconds=1.0)
+    assert robot.arm.folded
+    assert world.openness(name) == pytest.approx(opened, abs=0.02 / 0.375)  # moved less than 2 cm
