@@ -159,24 +159,29 @@ class Arm:
     def retract(self) -> None:
         """Tuck the arm (the torso stays): with an empty hand straight there if that swing touches nothing,
         quicker; else through `raised`, the hand first risen clear for that swing where it must (`_rise_to_swing`),
-        along `swing_way`. Where that finds no way,
-        the base first backs straight away, the arm held as it is (`_backed_off`), and the way is sought again
-        from there (swung straight from beside a dresser's drawer it had just pulled open, the open hand pushed
-        the drawer 28 cm shut); straight where there is none then. Every check sees the fingers as they are
-        (`_as_is`): checked closed, a hand opened wide to let go of a cd swung back from the tv stand and dragged
-        the radio beside it onto the floor."""
+        along what `swing_way` finds. With an empty hand every check sees the fingers as they are (`_as_is`;
+        checked closed, a hand opened wide to let go of a cd swung back from the tv stand and dragged the radio
+        beside it onto the floor), and where no way is found the base first backs straight away, the arm held as
+        it is (`_backed_off`), and the way is sought again from there (swung straight from beside a dresser's
+        drawer it had just pulled open, the open hand pushed the drawer shut); straight where there is none then.
+        Holding something, the swings are checked as planned (seeing the fingers round a side-held box of wipes
+        as they are, the retract took another way, and carried on to its set-down the box swept a sauce pan off
+        the stove)."""
         if not self.folded:
             tucked = self._as_is(self.tucked())
             if self.held is None and self.swing_clear(self._as_is(self.controller.target), tucked):
                 self.controller.move_through([tucked], **FREE_MOTION)
+            elif self.held is not None:
+                self._rise_to_swing()
+                raised = self.raised(self.controller.target[3])
+                self.controller.move_through([*self._swing_via(self.controller.target, raised), raised, tucked])
             else:
                 self._rise_to_swing()
-                held = None if self.held is None else self.held_object(self.held)
-                via = self.swing_way(self._as_is(self.controller.target), self._raised_as_is(), held)
-                back = self._backed_off(held) if via is None else None
+                via = self.swing_way(self._as_is(self.controller.target), self._raised_as_is())
+                back = self._backed_off(None) if via is None else None
                 if back:
                     self.controller.move_through(back)
-                    via = self.swing_way(self._as_is(self.controller.target), self._raised_as_is(), held)
+                    via = self.swing_way(self._as_is(self.controller.target), self._raised_as_is())
                 self.controller.move_through([*(via or []), self._raised_as_is(), self._as_is(self.tucked())])
         self.folded = True
 
@@ -239,11 +244,11 @@ class Arm:
         RETRACT_STEP m as long as the arm (and what it holds) touches nothing, RETRACT_RISE m at most, to the
         first height from which that swing is clear (or the highest clear one): a hand let go low over a low
         table swung sideways into the raised arm across it and pushed a violin 18 cm. The fingers are checked too,
-        as they are (`_as_is`): risen from below the handle of a drawer it had just let go of, the open hand rose
-        into the handle and the swing from there pushed the drawer 10 cm shut."""
+        with an empty hand as they are (`_as_is`): risen from below the handle of a drawer it had just let go of,
+        the open hand rose into the handle and the swing from there pushed the drawer 10 cm shut."""
         held = None if self.held is None else self.held_object(self.held)
-        start = self._as_is(self.controller.target)
-        if self.swing_clear(start, self._raised_as_is(), held):
+        start = self.controller.target if held else self._as_is(self.controller.target)
+        if self.swing_clear(start, self.raised(start[3]) if held else self._raised_as_is(), held):
             return
         grip, quat = self.ik.grip_pose(start)
         steps = int(round(RETRACT_RISE / RETRACT_STEP))
@@ -253,7 +258,7 @@ class Arm:
             if not self.clearance.clear(q, held=held, fingers=True):
                 break
             up.append(q)
-            if self.swing_clear(q, self._as_is(self.raised(q[3])), held):
+            if self.swing_clear(q, self.raised(q[3]) if held else self._as_is(self.raised(q[3])), held):
                 break
         if up:
             self.controller.move_through(up)
