@@ -159,41 +159,40 @@ class Arm:
     def retract(self) -> None:
         """Tuck the arm (the torso stays): with an empty hand straight there if that swing touches nothing,
         quicker; else through `raised`, the hand first risen clear for that swing where it must (`_rise_to_swing`),
-        along what `swing_way` finds. With an empty hand every check sees the fingers as they are (`_as_is`;
-        checked closed, a hand opened wide to let go of a cd swung back from the tv stand and dragged the radio
-        beside it onto the floor), and where no way is found the base first backs straight away, the arm held as
-        it is (`_backed_off`), and the way is sought again from there (swung straight from beside a dresser's
-        drawer it had just pulled open, the open hand pushed the drawer shut); straight where there is none then.
-        Holding something, the swings are checked as planned (seeing the fingers round a side-held box of wipes
-        as they are, the retract took another way, and carried on to its set-down the box swept a sauce pan off
-        the stove)."""
+        along what `swing_way` finds, every check on the hand as `_seen`. With an empty hand, where no way is found
+        the base first backs straight away, the arm held as it is (`_backed_off`), and the way is sought again
+        from there (swung straight from beside a dresser's drawer it had just pulled open, the open hand pushed
+        the drawer shut); straight where there is none then."""
         if not self.folded:
-            tucked = self._as_is(self.tucked())
-            if self.held is None and self.swing_clear(self._as_is(self.controller.target), tucked):
+            tucked = self._seen(self.tucked())
+            if self.held is None and self.swing_clear(self._seen(self.controller.target), tucked):
                 self.controller.move_through([tucked], **FREE_MOTION)
-            elif self.held is not None:
-                self._rise_to_swing()
-                raised = self.raised(self.controller.target[3])
-                self.controller.move_through([*self._swing_via(self.controller.target, raised), raised, tucked])
             else:
                 self._rise_to_swing()
-                via = self.swing_way(self._as_is(self.controller.target), self._raised_as_is())
-                back = self._backed_off(None) if via is None else None
+                held = None if self.held is None else self.held_object(self.held)
+
+                def way() -> list[np.ndarray] | None:  # from where the arm is now into the raised arm
+                    target = self.controller.target
+                    return self.swing_way(self._seen(target), self._seen(self.raised(target[3])), held)
+
+                via = way()
+                back = self._backed_off(None) if via is None and held is None else None
                 if back:
                     self.controller.move_through(back)
-                    via = self.swing_way(self._as_is(self.controller.target), self._raised_as_is())
-                self.controller.move_through([*(via or []), self._raised_as_is(), self._as_is(self.tucked())])
+                    via = way()
+                self.controller.move_through([*(via or []), self.raised(self.controller.target[3]), self.tucked()])
         self.folded = True
 
-    def _as_is(self, q: np.ndarray) -> np.ndarray:
-        """Configuration q (shape (13,)) with the fingers as they are now (a move through it leaves them so)."""
+    def _seen(self, q: np.ndarray) -> np.ndarray:
+        """Configuration q (shape (13,)) as a retract's checks see it: with an empty hand, the fingers as they are
+        now (a move through q leaves them so; checked at the target's start value, closed, a hand opened wide to
+        let go of a cd swung back from the tv stand and dragged the radio beside it onto the floor); holding
+        something, as planned (seeing the fingers round a side-held box of wipes as they are, the retract took
+        another way, and carried on to its set-down the box swept a sauce pan off the stove)."""
         q = q.copy()
-        q[self.controller.n_body:] = self.controller.q()[self.controller.n_body:]
+        if self.held is None:
+            q[self.controller.n_body:] = self.controller.q()[self.controller.n_body:]
         return q
-
-    def _raised_as_is(self) -> np.ndarray:
-        """`raised` at the torso's target height, the fingers as they are now."""
-        return self._as_is(self.raised(self.controller.target[3]))
 
     def _swing_via(self, q_from: np.ndarray, q_to: np.ndarray) -> list[np.ndarray]:
         """`swing_way` from q_from to q_to with what the hand holds; none where it finds no way."""
@@ -243,12 +242,12 @@ class Arm:
         """Where the joint-space swing into `raised` would touch something, first move the hand straight up, every
         RETRACT_STEP m as long as the arm (and what it holds) touches nothing, RETRACT_RISE m at most, to the
         first height from which that swing is clear (or the highest clear one): a hand let go low over a low
-        table swung sideways into the raised arm across it and pushed a violin 18 cm. The fingers are checked too,
-        with an empty hand as they are (`_as_is`): risen from below the handle of a drawer it had just let go of,
+        table swung sideways into the raised arm across it and pushed a violin 18 cm. The fingers are checked too
+        (as `_seen`): risen from below the handle of a drawer it had just let go of,
         the open hand rose into the handle and the swing from there pushed the drawer 10 cm shut."""
         held = None if self.held is None else self.held_object(self.held)
-        start = self.controller.target if held else self._as_is(self.controller.target)
-        if self.swing_clear(start, self.raised(start[3]) if held else self._raised_as_is(), held):
+        start = self._seen(self.controller.target)
+        if self.swing_clear(start, self._seen(self.raised(start[3])), held):
             return
         grip, quat = self.ik.grip_pose(start)
         steps = int(round(RETRACT_RISE / RETRACT_STEP))
@@ -258,7 +257,7 @@ class Arm:
             if not self.clearance.clear(q, held=held, fingers=True):
                 break
             up.append(q)
-            if self.swing_clear(q, self.raised(q[3]) if held else self._as_is(self.raised(q[3])), held):
+            if self.swing_clear(q, self._seen(self.raised(q[3])), held):
                 break
         if up:
             self.controller.move_through(up)
