@@ -31,6 +31,7 @@ from planners.motion.arm import (
     PITCHED_HAND,
     PULL_BASE_COST,
     SIDE_LIFT,
+    WAYPOINT_TOL,
     Arm,
 )
 from planners.motion.clearance import ARC_BASE_COST, Held
@@ -233,6 +234,7 @@ class Place:
             above = release + np.array([0.0, 0.0, APPROACH])
             if self.arm.solve(above, quat).converged:
                 break
+        came_from = self.controller.target.copy()  # withdrawn to on a failure (see the docstring)
         if short:
             surface = target[2] - self.world.object_class(name).size[2] / 2
             rise = tallest_beside(self.world, name, target, surface, PASS_NEAR) - surface + PASS_OVER
@@ -242,34 +244,34 @@ class Place:
                                             self.controller.target.copy(), **CARRY_MOTION)
                 except NavigationError:
                     pass  # reach from where it stands
+        onto = node if node in self.world.object_names else None
         over = self._way_over(name, above, quat)
         if over is None:
             pre = self.arm.solve(above, quat)
             if not pre.converged:
-                return SkillResult(False, f"place: {name} above {node} is {pre.reason}")
+                return self._withdrawn(came_from, f"place: {name} above {node} is {pre.reason}")
             over = [pre.q]
-        struck = self._struck(name, over)
+        down = self.arm.line(above, release, quat, seed=over[-1])
+        if down is None:
+            return self._withdrawn(came_from, f"place: lowering {name} onto {node} leaves the arm's reach")
+        struck = self._struck(name, over) or self._struck(name, down, onto)
         if struck:
-            return SkillResult(False, f"place: {name} on its way above {node} would strike {', '.join(struck)}")
+            return self._withdrawn(came_from, f"place: {name} on its way to {node} would strike {', '.join(struck)}")
         if len(over) > 1:
             self.controller.move_through(over)
         else:
             self.arm.reach(over[0])
         self.controller.settle(0.003)
         again = target + grip.xpos - self.world.object_pose(name)[0] + np.array([0.0, 0.0, 0.01])  # as it hangs now
-        down = None
         if np.linalg.norm(again - release) > CARRY_SLIP:  # turned in the fingers: over the spot again, then down
             lifted = again + np.array([0.0, 0.0, APPROACH])
             over_again = self.arm.line(grip.xpos.copy(), lifted, quat)
             straight = over_again and self.arm.line(lifted, again, quat, seed=over_again[-1])
             if straight:
                 down, release = over_again + straight, again
-        down = down or self.arm.line(above, release, quat)
-        if down is None:
-            return SkillResult(False, f"place: lowering {name} onto {node} leaves the arm's reach")
-        struck = self._struck(name, down, onto=node if node in self.world.object_names else None)
-        if struck:
-            return SkillResult(False, f"place: lowering {name} onto {node} would strike {', '.join(struck)}")
+                struck = self._struck(name, down, onto)
+                if struck:
+                    return SkillResult(False, f"place: lowering {name} onto {node} would strike {', '.join(struck)}")
         self.controller.move_through(down)
         self.controller.settle(0.003)
         return self._release_on(name, node, target, release, quat)
@@ -379,6 +381,17 @@ class Place:
         g1, g2 = data.contact.geom1[:data.ncon], data.contact.geom2[:data.ncon]
         return np.concatenate([g2[(model.geom_bodyid[g1] == body) & ~robot[g2]],
                                g1[(model.geom_bodyid[g2] == body) & ~robot[g1]]])
+
+    def _withdrawn(self, q: np.ndarray, reason: str) -> SkillResult:
+        """The failure `reason`, after driving the base straight back to configuration q's (shape (13,)) with the
+        arm and the held object as they are, where it drove in from there (a lowering given up next to a sauce pan
+        left a can of wipes out over the stove, the base driven in close, and the drive to the next top swept the
+        pan off it)."""
+        if np.linalg.norm(self.controller.target[:2] - q[:2]) > WAYPOINT_TOL[0]:
+            back = self.controller.target.copy()
+            back[:3] = q[:3]
+            self.controller.move_through([back], **CARRY_MOTION)
+        return SkillResult(False, reason)
 
     def _lower(self, name: str, node: str, target: np.ndarray, short: bool) -> SkillResult:
         """Lower the held `name` onto `target` (m, a spot on `node`) after a carry that stopped `short` or not: along

@@ -430,3 +430,31 @@ def test_an_object_touching_a_wall_does_not_rest_only_on_where_it_goes(world: Wo
     assert place._rests_only_on("clothes_dress", "basket_for_clothes")
     place._touching = lambda name: np.array([basket, wall])
     assert not place._rests_only_on("clothes_dress", "basket_for_clothes")
+
+
+def test_a_lowering_that_would_strike_a_neighbour_is_given_up_where_the_carry_left_the_robot() -> None:
+    """`Place._lower_onto` plans the way over the spot and the way down before it moves, and where either would
+    strike another object it gives up with the base driven back out: moved over the stove first, then refused, a
+    can of wipes was left out over the stove with the base driven in close, and the drive to the next top swept the
+    sauce pan off it."""
+    world = World(extras=[add_robot])
+    world.settle()
+    robot = Robot(world, np.random.default_rng(0))
+    robot.observer.observe_all()
+    name = "food_bread"
+    assert robot.pick(name).success
+    pan = world.object_pose("sauce_pan")[0]
+    top = pan[2] - CATALOG["sauce_pan"].size[2] / 2
+    target = np.array([pan[0] - 0.13, pan[1], top + CATALOG[name].size[2] / 2])  # the bread's spot beside the pan
+    failure, _ = robot._place._carry_to(name, "stove", target)
+    assert failure is None
+    back = robot.controller.target.copy()  # stopped 0.3 m short: the lowering drives in first
+    back[:2] -= 0.3 * np.array([np.cos(back[2]), np.sin(back[2])])
+    robot.controller.move_through([back])
+    before, held_at = world.object_positions(), world.object_pose(name)[0].copy()
+    outcome = robot._place._lower_onto(name, "stove", target, short=True)
+    assert not outcome.success and "sauce_pan" in outcome.reason, outcome.reason
+    assert robot.held == name
+    assert np.linalg.norm(robot.controller.q()[:2] - back[:2]) < 0.05
+    assert np.linalg.norm(world.object_pose(name)[0][:2] - held_at[:2]) < 0.05  # not moved over the stove
+    assert _others_moved(world, before, name)[0] < 0.005
