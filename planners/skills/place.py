@@ -223,7 +223,8 @@ class Place:
         the hand on the way above the spot, it is aimed again from where it hangs then, over its spot and straight
         down, if the arm reaches that (a laundry basket pinched at its rim pivoted 35 degrees on the way and stopped
         5.5 cm above the floor). Nothing is lowered where the arm or the object would come down on another object
-        (`_struck`)."""
+        (`_struck`): the ways over the spot and down are checked before the hand moves over it, and a refusal
+        drives the base back out to where the carry left it (`_withdrawn`)."""
         grip = self.world.data.site("robot/grip")
         now = grip.xmat.reshape(3, 3)
         offset = grip.xpos - self.world.object_pose(name)[0]  # where the object hangs from the hand now
