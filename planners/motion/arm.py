@@ -315,7 +315,9 @@ class Arm:
                      ) -> tuple[list[np.ndarray], float] | None:
         """Drive (arm tucked) to a free base pose from which the way into `grasp` is reachable with the arm
         clear of the apartment: the grip `entry` m out along `pull` (a horizontal unit vector out of the
-        furniture, shape (3,)) from the approach point, in along a straight line, the approach, and SIDE_LIFT m
+        furniture, shape (3,)) from the approach point, in along a straight line, the approach (within the arm's
+        reach only: the fingers close round the object there; from a base pose that did not reach it, the arm
+        went out over a laundry basket on the floor and gave up above the dress in it), and SIDE_LIFT m
         (else, out of furniture, LOW_SIDE_LIFT m) above the grasp. Returns the configurations (each shape (13,))
         from the entry to the approach point and that lift (m), or None (the robot stays) if no base pose works.
         Base poses face the grasp along its approach, then, where the approach leans more than ASIDE_LEAN aside
@@ -343,6 +345,8 @@ class Arm:
             if not start.converged or not self.clearance.clear(start.q):
                 continue
             path = self.checked_line(start.q, [above + entry * pull, above], quat)
+            if path is not None and self.line(above, grasp.position, quat, seed=path[-1]) is None:
+                continue  # the approach onto the grasp leaves the arm's reach from here
             lift = None if path is None else next((h for h in lifts if self._lift_clear(
                 path[-1], above, grasp, h, held if h > SIDE_LIFT else None)), None)
             if lift is None:

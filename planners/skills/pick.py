@@ -447,8 +447,8 @@ class Pick:
         vector out of the furniture, shape (3,)) up `first_lift` m (SIDE_LIFT unless the way in was checked only
         with LOW_SIDE_LIFT, or more over what stands in front), out `drawn` m and up SIDE_RAISE m.
         path_in: configurations (each shape (13,)) ending at the approach point, already checked; when None the
-        approach configuration is solved here. Nothing moves where the fingers may not close there (see
-        `_closing_blocked`)."""
+        approach configuration is solved here. Nothing moves where the descent leaves the arm's reach or the
+        fingers may not close there (see `_closing_blocked`)."""
         quat = grasp.quat()
         back = -grasp.rotation[:, 0]  # from the grasp towards where the gripper comes from
         above = grasp.position + grasp.approach * back
@@ -458,9 +458,11 @@ class Pick:
                 return SkillResult(False, f"approach pose {pre.reason}")
             path_in = [pre.q]
         planned = self._descent(above, grasp.position, quat, seed=path_in[-1])  # nothing moved yet
-        if planned is not None and (blocked := self._closing_blocked(name, grasp, planned[-1])):
+        if planned is None:
+            return SkillResult(False, "the descent leaves the arm's reach")
+        if blocked := self._closing_blocked(name, grasp, planned[-1]):
             return SkillResult(False, blocked)
-        struck = None if planned is None else self._neighbours_struck(name, planned, grasp.pre_opening)
+        struck = self._neighbours_struck(name, planned, grasp.pre_opening)
         if struck:
             return SkillResult(False, f"an open finger would come down on {', '.join(struck)}")
         since = self.world.object_positions()

@@ -458,3 +458,23 @@ def test_a_lowering_that_would_strike_a_neighbour_is_given_up_where_the_carry_le
     assert np.linalg.norm(robot.controller.q()[:2] - back[:2]) < 0.05
     assert np.linalg.norm(world.object_pose(name)[0][:2] - held_at[:2]) < 0.05  # not moved over the stove
     assert _others_moved(world, before, name)[0] < 0.005
+
+
+def test_a_grasp_whose_descent_leaves_the_arms_reach_moves_nothing(monkeypatch) -> None:
+    """`Pick._try_grasp` plans the descent onto the grasp before the arm moves: where it leaves the arm's reach, the
+    arm stays tucked (it went out over a laundry basket on the floor and gave up above the dress in it)."""
+    from planners.skills.pick import Pick
+
+    world = World(extras=[add_robot])
+    world.settle()
+    robot = Robot(world, np.random.default_rng(0))
+    name = "food_bread"
+    node = robot.observer.observe_all().parent_of(name)
+    position, quat = world.object_pose(name)
+    robot.arm.go_to(node, position[:2])  # in front of it, the arm tucked
+    grasp = robot._pick._above_candidates(node, world.object_class(name), position, quat)[0]
+    monkeypatch.setattr(Pick, "_descent", lambda *args, **kwargs: None)
+    before = robot.controller.q().copy()
+    outcome = robot._pick._try_grasp(name, grasp)
+    assert not outcome.success and "descent" in outcome.reason, outcome.reason
+    assert np.abs(robot.controller.q() - before).max() < 1e-3
