@@ -267,7 +267,9 @@ def psi(graph: SceneGraph, movable: np.ndarray, rollout: Rollout, *, threshold: 
     carried: objects in the person's hand. excluded: object name -> why the robot cannot grasp it (None if it can).
     holds: objects the robot placed and keeps for the person. in_use: furniture the person is at now; nothing is
     taken from it or put on it while they are there (the robot does not clear a table the person eats at); nothing
-    is taken to or from `outside` (the robot stays in the apartment). Moves
+    is taken to or from `outside` (the robot stays in the apartment). Nor is an object with things on or in it
+    that no relocation moves: carried along, they would be displaced (a laundry basket predicted back to the
+    bedroom went there with the clothes still in it, 5.5 m from the washing machine the person took them to). Moves
     that do not reach the threshold are reported among the skipped ones. returns: relocations made whatever the
     prediction (`unused_help`); they replace the predicted moves of their objects.
     """
@@ -275,10 +277,15 @@ def psi(graph: SceneGraph, movable: np.ndarray, rollout: Rollout, *, threshold: 
     returned = {r.obj for r in returns}
     passed = [*returns, *(r for r in passed if r.obj not in returned)]
     below = [r for r in below if r.obj not in returned]
+    moving = {r.obj for r in passed}
 
     def skip(r: Relocation) -> str | None:
         if r.obj in carried:
             return "in the person's hand"
+        riders = [graph.nodes[i] for i in np.flatnonzero(graph.parent == graph.index(r.obj))
+                  if graph.nodes[i] not in moving]
+        if riders:
+            return f"{', '.join(riders)} on or in it would be carried along, moved by no relocation"
         held = holds.reason(r.obj) if holds is not None else None
         busy = [n for n in (anchor_of(graph, movable, r.source), r.destination) if n in in_use]
         if OUTSIDE in (graph.room_of(r.source), graph.room_of(r.destination)):

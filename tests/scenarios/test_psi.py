@@ -281,3 +281,14 @@ def test_a_relocation_waiting_for_the_person_is_counted_when_it_can_no_longer_be
     outcomes = helper.log.relocations
     assert [(o.relocation.obj, o.done) for o in outcomes] == [("bowl", False), ("milk", False)]
     assert {cause_of(o.reason) for o in outcomes} == {"the person in the way"}
+
+
+def test_an_object_with_things_in_it_is_moved_only_with_them() -> None:
+    """Carried along, what rests in a moved object would be displaced with no relocation naming it (a laundry basket
+    went back to the bedroom with the clothes in it): such a move is skipped, unless those things move too."""
+    graph = _graph(spoon="bowl")
+    plan = _plan(graph, _rollout(graph, {"bowl": [("table", 0.9)] * 3}))
+    assert plan.relocations == ()
+    assert "spoon" in dict((r.obj, why) for r, why in plan.skipped)["bowl"]
+    plan = _plan(graph, _rollout(graph, {"bowl": [("table", 0.9)] * 3, "spoon": [("sink", 0.9)] * 3}))
+    assert {r.obj for r in plan.relocations} == {"bowl", "spoon"}
