@@ -270,9 +270,9 @@ class Place:
             straight = over_again and self.arm.line(lifted, again, quat, seed=over_again[-1])
             if straight:
                 down, release = over_again + straight, again
-                struck = self._struck(name, down, onto)
-                if struck:
-                    return SkillResult(False, f"place: lowering {name} onto {node} would strike {', '.join(struck)}")
+            struck = self._struck(name, down, onto)  # checked again as the object hangs now
+            if struck:
+                return SkillResult(False, f"place: lowering {name} onto {node} would strike {', '.join(struck)}")
         self.controller.move_through(down)
         self.controller.settle(0.003)
         return self._release_on(name, node, target, release, quat)
