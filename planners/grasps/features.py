@@ -142,7 +142,8 @@ def rim_grasps(hollow, position: np.ndarray, yaw: float, support: float, robot_x
     `rim_lift` (the lowest edge clears the floor; at least `hang_lift`) and turns towards where the container
     would hang (`hang`, see `hang_rotation`), its bottom swinging away from the robot (from the near rim it
     swings onto the robot's base). Seen in the grasp suite: the 44 cm bin turns only part of the way, the pads
-    turn about its wall and jam it (slip under 1 mm)."""
+    turn about its wall and jam it (slip under 1 mm). Its near rim is pinched last, not hung (it tilts about the
+    pinch, bottom towards the robot): for a bin whose far rim the arm cannot reach (in the middle of a bed)."""
     c, s = math.cos(yaw), math.sin(yaw)
     centre = position[:2] + np.array([c * hollow.center_xy[0] - s * hollow.center_xy[1],
                                       s * hollow.center_xy[0] + c * hollow.center_xy[1]])
@@ -155,15 +156,18 @@ def rim_grasps(hollow, position: np.ndarray, yaw: float, support: float, robot_x
         lift = max(rim_lift(hollow, rim_z - support, rim_z - z),
                    hang_lift(np.array([hollow.rim_radius + 0.004, 0.0, z - position[2]])))
     grasps = []
-    for delta in RIM_TURNS:
-        angle = toward + delta + (math.pi if straight else 0.0)
-        if len(grasps) == RIM_POINTS or _at_a_handle(hollow, handles, np.array([math.cos(angle - yaw),
-                                                                                math.sin(angle - yaw)])):
-            continue
-        radial = np.array([math.cos(angle), math.sin(angle)])
-        xy = centre + radial * (hollow.rim_radius + 0.004)
-        grasps.append(Grasp(np.array([xy[0], xy[1], z]), top_rotation(angle), RIM_OPENING, GraspKind(Family.RIM),
-                            lift=lift, hang=straight))
+    for side in (math.pi, 0.0) if straight else (0.0,):  # a bin's far rim, then its near one
+        points = 0
+        for delta in RIM_TURNS:
+            angle = toward + side + delta
+            if points == RIM_POINTS or _at_a_handle(hollow, handles, np.array([math.cos(angle - yaw),
+                                                                               math.sin(angle - yaw)])):
+                continue
+            radial = np.array([math.cos(angle), math.sin(angle)])
+            xy = centre + radial * (hollow.rim_radius + 0.004)
+            grasps.append(Grasp(np.array([xy[0], xy[1], z]), top_rotation(angle), RIM_OPENING,
+                                GraspKind(Family.RIM), lift=lift, hang=side != 0.0))
+            points += 1
     return grasps
 
 

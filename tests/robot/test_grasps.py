@@ -278,6 +278,9 @@ def test_a_bin_is_pinched_deep_at_its_far_rim_lifted_clear_and_hung() -> None:
     # and hanging straight below the pinch, its centre ends HANG_RISE above where it stood
     offset = first.position - position
     assert first.lift - (np.linalg.norm(offset) - offset[2]) >= HANG_RISE - 1e-9
+    near = [g.position[0] < 0 for g in grasps]  # its near rim, after every far pinch, not hung
+    assert 0 < sum(near) < len(near) and near == sorted(near)
+    assert all(not g.hang for g, n in zip(grasps, near, strict=True) if n)
     bowl = top_grasps(CATALOG["bowl"], np.array([0.0, 0.0, 0.035]), _yawed(0.0), np.array([-1.0, 0.0]))[0]
     assert bowl.label == "rim" and not bowl.hang and bowl.lift == 0.0 and bowl.position[0] < 0  # flared: near rim
 
@@ -304,12 +307,13 @@ def _fingers_on_a_handle(cls, position: np.ndarray, yaw_deg: float, grasp) -> bo
 def test_rim_pinches_of_a_pot_skip_the_rim_at_its_side_handles(name: str) -> None:
     """With a side handle pointing at or away from the robot, the rim point the pinches start from (a pot's straight
     wall: the far one) lies at a handle: the outer finger comes down on the handle plate. Such points are skipped
-    for points farther round the rim, still three."""
+    for points farther round the rim, still three on each side (the far rim's, then the near rim's)."""
     cls = CATALOG[name]
     position = np.array([0.0, 0.0, cls.size[2] / 2])
     for yaw in (0.0, 15.0, 180.0, 200.0):  # a handle at or near the robot (on +x)
         grasps = top_grasps(cls, position, _yawed(yaw), np.array([1.0, 0.0]))
-        assert [g.label for g in grasps] == ["rim"] * 3, yaw
+        assert [g.label for g in grasps] == ["rim"] * 6, yaw
+        assert all(g.position[0] < 0 for g in grasps[:3]) and all(g.position[0] > 0 for g in grasps[3:]), yaw
         assert not any(_fingers_on_a_handle(cls, position, yaw, g) for g in grasps), yaw
     clear = top_grasps(cls, position, _yawed(90.0), np.array([1.0, 0.0]))  # the handles to either side
     assert clear[0].position[0] < 0 and abs(clear[0].position[1]) < 1e-9  # straight walls: the far rim first, as before
