@@ -27,7 +27,7 @@ from planners.motion.control import FREE_MOTION
 from planners.motion.navigation import IN_THE_WAY, NavigationError
 from planners.robot import DEFAULT_POSE, ROBOT_CLEARANCE_M
 from planners.skills import Robot, SkillResult
-from planners.skills.parts import CLOSED_OK, parts_to_open
+from planners.skills.parts import CLOSED_OK, parts_to_open, parts_to_place
 from scenarios.causes import SKILL_ERROR
 from scenarios.psi import PlanStep, Relocation, anchor_of, plan_steps
 
@@ -114,9 +114,8 @@ class Helper:
         relocations, self.waiting = [*still, *relocations], []
         if not relocations:
             return float(minute)
-        steps = self._needed(plan_steps(graph, movable, relocations, self.containers, self.open_containers(),
-                                        self.blocked),
-                             relocations, graph, movable)
+        steps = plan_steps(graph, movable, relocations, self._parts_needed(relocations, graph, movable),
+                           self.open_containers(), self.blocked)
         before = self.world.object_positions()
         started, first = float(self.world.data.time), len(self.log.relocations)
         self._carry_out(steps, relocations, minute, started)
@@ -142,16 +141,21 @@ class Helper:
         """Containers with a door or drawer open more than a tenth."""
         return {f for f, parts in self.containers.items() if any(self.world.openness(p) > 0.1 for p in parts)}
 
-    def _needed(self, steps: Sequence[PlanStep], relocations: Sequence[Relocation], graph: SceneGraph,
-                movable: np.ndarray) -> tuple[PlanStep, ...]:
-        """`steps` without the opening and closing of parts no relocation needs: of the furniture an object is
-        taken from, only the drawer it lies in (`parts_to_open`); the destination's parts all stay."""
-        needed: set[str] = set()
+    def _parts_needed(self, relocations: Sequence[Relocation], graph: SceneGraph, movable: np.ndarray
+                      ) -> dict[str, list[str]]:
+        """The containers `relocations` open, each with the parts they need open (the relocation suite's rules):
+        of the furniture an object is taken from, every door or the drawer it lies in (`parts_to_open`); of a
+        destination, what its places lie behind (`parts_to_place`). A dresser is placed on its top: its three
+        drawers, all opened for that, moved the jackets in them 3-7 cm and one stuck half open."""
+        needed: dict[str, set[str]] = {}
         for r in relocations:
-            source = self.containers.get(anchor_of(graph, movable, r.source), ())
-            needed.update(parts_to_open(self.world, graph, list(source), r.obj))
-            needed.update(self.containers.get(r.destination, ()))
-        return tuple(s for s in steps if s.action not in ("open", "close") or s.target in needed)
+            source = anchor_of(graph, movable, r.source)
+            taken = parts_to_open(self.world, graph, list(self.containers.get(source, ())), r.obj)
+            put = parts_to_place(self.world, self.robot.spots, list(self.containers.get(r.destination, ())),
+                                 r.destination)
+            for furniture, parts in ((source, taken), (r.destination, put)):
+                needed.setdefault(furniture, set()).update(parts)
+        return {f: [p for p in self.containers[f] if p in parts] for f, parts in needed.items() if parts}
 
     # --- acting ---------------------------------------------------------------------------------------------
     def _carry_out(self, steps: Sequence[PlanStep], relocations: Sequence[Relocation], minute: int,
