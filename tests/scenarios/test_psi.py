@@ -292,3 +292,29 @@ def test_an_object_with_things_in_it_is_moved_only_with_them() -> None:
     assert "spoon" in dict((r.obj, why) for r, why in plan.skipped)["bowl"]
     plan = _plan(graph, _rollout(graph, {"bowl": [("table", 0.9)] * 3, "spoon": [("sink", 0.9)] * 3}))
     assert {r.obj for r in plan.relocations} == {"bowl", "spoon"}
+
+
+def test_the_places_of_the_persons_latest_moves_are_left_alone_for_a_window() -> None:
+    """PsiPolicy takes the person to be using where they last moved things (what came from there and went there)
+    for a window after, as the replay that tunes its threshold does (`model.metrics.robot_counts`); the robot's
+    own relocations are not the person's moves."""
+    from types import SimpleNamespace
+
+    from scenarios.policies import PsiPolicy
+
+    scene = SimpleNamespace(nodes=NODES, index=IDX, ungraspable={})
+    policy = PsiPolicy(scene, SimpleNamespace(params={"threshold": 0.5}, movable=MOVABLE), window_min=30)
+    policy._watch(_graph(), 400, set())
+    assert policy._used_lately(400) == frozenset()  # nothing seen moving yet
+    policy._watch(_graph(bowl="table"), 410, set())  # the person took the bowl out of the cupboard
+    assert policy._used_lately(420) == {"cupboard", "table"}
+    policy._watch(_graph(bowl="table"), 420, set())  # nothing moved since: the latest moves still count
+    assert policy._used_lately(430) == {"cupboard", "table"}
+    assert policy._used_lately(440) == frozenset()  # a window after them
+    policy._watch(_graph(bowl="table", milk="sink"), 430, {IDX["milk"]})  # the robot's relocation
+    assert policy._used_lately(430) == {"cupboard", "table"}
+    policy._watch(_graph(bowl="table", milk="sink", spoon="bowl"), 440, set())  # into the bowl: at the table
+    assert policy._used_lately(440) == {"cupboard", "bowl", "table"}
+    graph = _graph(bowl="table", milk="sink", spoon="bowl")
+    plan = _plan(graph, _rollout(graph, {"cereal": [("table", 0.9)] * 3}), in_use=policy._used_lately(440))
+    assert plan.relocations == () and "the person is at" in plan.skipped[0][1]
