@@ -115,6 +115,17 @@ def test_pick_for_a_room_floor_takes_the_object() -> None:
     assert robot.held == "food_bread"
 
 
+def _basket_onto_the_floor(world: World, robot: Robot, room: str) -> None:
+    """Pick the laundry basket for `room`, put it down on its floor; it must stand there."""
+    result = robot.pick("basket_for_clothes", into=room)
+    assert result.success, result.reason
+    result = robot.place(room)
+    assert result.success, result.reason
+    world.settle(max_seconds=2.0)
+    assert robot.observer.update().parent_of("basket_for_clothes") == room
+    assert not robot.arm.fallen_over("basket_for_clothes")
+
+
 def test_a_laundry_basket_pinched_at_its_rim_is_put_down_on_a_rooms_floor() -> None:
     """The basket turns in the fingers on the way above its spot (pinched at one point of its rim, it pivots): the
     place aims it again from where it hangs then. Aimed from where it hung after the carry, it stopped 5.1 cm above
@@ -123,26 +134,14 @@ def test_a_laundry_basket_pinched_at_its_rim_is_put_down_on_a_rooms_floor() -> N
     world.settle()
     robot = Robot(world, np.random.default_rng(0))
     robot.observer.observe_all()
-    result = robot.pick("basket_for_clothes", into="bathroom")
-    assert result.success, result.reason
-    result = robot.place("bathroom")
-    assert result.success, result.reason
-    world.settle(max_seconds=2.0)
-    assert robot.observer.update().parent_of("basket_for_clothes") == "bathroom"
-    assert not robot.arm.fallen_over("basket_for_clothes")
+    _basket_onto_the_floor(world, robot, "bathroom")
 
 
 def test_a_laundry_basket_in_the_middle_of_the_bed_is_pinched_at_its_near_rim() -> None:
     """Its far rim, where a bin is pinched to hang clear of the robot, lies out of the arm's reach from every side
     of the bed (the pick failed there, "approach pose unreachable"); the near rim is pinched instead."""
     world, robot = _scene("basket_for_clothes", (8.57, 6.0, 0.72), "bed", seed=0)
-    result = robot.pick("basket_for_clothes", into="bedroom")
-    assert result.success, result.reason
-    result = robot.place("bedroom")
-    assert result.success, result.reason
-    world.settle(max_seconds=2.0)
-    assert robot.observer.update().parent_of("basket_for_clothes") == "bedroom"
-    assert not robot.arm.fallen_over("basket_for_clothes")
+    _basket_onto_the_floor(world, robot, "bedroom")
 
 
 def test_unfold_check_sees_the_table_top_the_folded_elbow_swings_over() -> None:
