@@ -2,7 +2,8 @@
 
 `PsiPolicy` is the paper's robot: it rolls a predictor `window_min` ahead from the observed scene graph (with the
 help it holds for the person back where it came from), turns
-the first predicted changes into relocations with Psi (`scenarios.psi`), and remembers its own help (objects it
+the first predicted changes into relocations with Psi (`scenarios.psi`), leaving alone what the person is using (where
+they stand, and the places of their latest moves for a window), and remembers its own help (objects it
 placed stay for the person; help left unused goes back; a failed relocation waits a window, or, when the cause is
 in the object's own state (`scenarios.causes.LASTING`), until someone has moved the object). `OraclePredictor`
 predicts from the unassisted replay of the same day (perfect prediction, for separating manipulation from

@@ -265,8 +265,9 @@ def psi(graph: SceneGraph, movable: np.ndarray, rollout: Rollout, *, threshold: 
     destinations within `window_steps` grid steps, gated by `threshold`, ordered by `plan_relocations`.
 
     carried: objects in the person's hand. excluded: object name -> why the robot cannot grasp it (None if it can).
-    holds: objects the robot placed and keeps for the person. in_use: furniture the person is at now; nothing is
-    taken from it or put on it while they are there (the robot does not clear a table the person eats at); nothing
+    holds: objects the robot placed and keeps for the person. in_use: the places the person is using (the furniture
+    they are at now; `PsiPolicy` adds those of their latest moves for a window); nothing is taken from them or put
+    on them (the robot does not clear a table the person eats at); nothing
     is taken to or from `outside` (the robot stays in the apartment). Nor is an object with things on or in it
     that no relocation moves: carried along, they would be displaced (a laundry basket predicted back to the
     bedroom went there with the clothes still in it, 5.5 m from the washing machine the person took them to). Moves
