@@ -214,7 +214,8 @@ def plan_steps(graph: SceneGraph, movable: np.ndarray, relocations: Sequence[Rel
     """The robot steps that make `relocations` in the order given: pick at the object's furniture, place on the
     destination.
 
-    containers: furniture name -> its articulations (`<furniture>/<part>`); every part of a container is opened
+    containers: furniture name -> the articulations to open (`<furniture>/<part>`; the assisted day passes those
+    the relocations need, `scenarios.assist.Helper._parts_needed`); they are opened
     before the first relocation that takes from or puts into it and closed after the last one (only containers
     the plan opened: those in `already_open` stay as the person left them). A relocation from one container into
     another that is still closed has one open at a time: picked, set down, the containers the plan opened closed,
