@@ -24,7 +24,7 @@ from homer_sim.home.layout import Layout
 from homer_sim.person.executor import DayLog
 from model.predictor import Rollout
 from scenarios.causes import CAUSES, LASTING
-from scenarios.psi import Holds, Plan, Relocation, psi, unused_help
+from scenarios.psi import Holds, Plan, Relocation, anchor_of, psi, unused_help
 from scenarios.task import NO_RELOCATION, SceneInfo
 
 log = logging.getLogger(__name__)
@@ -183,8 +183,7 @@ class PsiPolicy:
                      if int(i) not in handled]
             places = {graph.nodes[p] for i in moved for p in (self._parents[i], parent[i]) if p >= 0}
             if places:
-                anchors = {graph.anchor_of(p, {graph.nodes[i] for i in np.flatnonzero(self.predictor.movable)})
-                           for p in places}
+                anchors = {anchor_of(graph, self.predictor.movable, p) for p in places}
                 self._lately = (minute, frozenset(places | anchors))
         self._parents = parent.copy()
 

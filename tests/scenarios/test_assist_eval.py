@@ -244,9 +244,10 @@ def test_drawers_an_open_failed_part_way_are_closed_again_and_untouched_ones_are
 
 
 def test_only_the_parts_a_relocation_needs_are_opened(world) -> None:
-    """Clothes from the washing machine onto the dresser (placed on its top) open the washing machine's door only:
-    all three drawers, opened for it before, moved the jackets in them 3-7 cm and one stuck half open. Taken out of
-    a drawer, clothes open that drawer only; into a cabinet, its door opens."""
+    """Something from the washing machine onto the dresser (placed on its top) opens the washing machine's door only:
+    all three drawers, opened for such a place before, moved the jackets in them 3-7 cm and one stuck half open.
+    Socks taken out of a drawer open that drawer only; into a cabinet, its door opens; off the dresser's top,
+    nothing opens."""
     from types import SimpleNamespace
 
     from homer_sim.home.spots import Spots
@@ -258,9 +259,9 @@ def test_only_the_parts_a_relocation_needs_are_opened(world) -> None:
     helper.robot = SimpleNamespace(spots=Spots(world))
     graph = SceneGraphObserver(world).observe_all()
     movable = np.array([n in world.object_names for n in graph.nodes])
-    onto_top = Relocation("clothes_socks", "dresser", "washing_machine", 1, 0.9)
+    out_of_a_drawer = Relocation("clothes_socks", "dresser", "washing_machine", 1, 0.9)
     assert graph.parent_of("clothes_socks") == "dresser" and graph.parent_of("clothes_jacket") == "dresser"
-    assert helper._parts_needed([onto_top], graph, movable) == {"dresser": ["dresser/drawer_0"],
+    assert helper._parts_needed([out_of_a_drawer], graph, movable) == {"dresser": ["dresser/drawer_0"],
                                                                 "washing_machine": ["washing_machine/door"]}
     to_dresser = Relocation("laundry_detergent", "washing_machine", "dresser", 1, 0.9)
     assert helper._parts_needed([to_dresser], graph, movable) == {"washing_machine": ["washing_machine/door"]}
